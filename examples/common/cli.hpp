@@ -1,0 +1,94 @@
+#pragma once
+// What every example shares: the common flags, the output folder, error reporting and exit codes.
+#include "rsph/core/errors.hpp"
+#include "rsph/io/atomic_file.hpp"
+
+#include <boost/program_options.hpp>
+#include <fmt/format.h>
+
+#include <chrono>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <functional>
+#include <sstream>
+#include <string>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace rsph::examples {
+
+namespace po = boost::program_options;
+
+/// Flags every example has.
+struct CommonOptions {
+  std::string out = "out";
+  std::string preset = "paper";
+  int threads = 0;
+  bool quiet = false;
+};
+
+inline void add_common_options(po::options_description& desc, CommonOptions& common) {
+  desc.add_options()("help,h", "show this help and exit")(
+      "out", po::value(&common.out)->default_value(common.out), "output folder (created if missing)")(
+      "preset", po::value(&common.preset)->default_value(common.preset),
+      "quick: a small run in seconds; paper: the full setup")(
+      "threads", po::value(&common.threads)->default_value(0), "OpenMP threads (0: all cores)")(
+      "quiet", po::bool_switch(&common.quiet), "no progress line");
+}
+
+/// Parses argv; returns false when --help was shown. Unknown flags throw with their name.
+inline bool parse(int argc, char** argv, const po::options_description& desc, po::variables_map& vm,
+                  const std::string& usage) {
+  po::store(po::parse_command_line(argc, argv, desc), vm);
+  if (vm.count("help")) {
+    fmt::print("{}\n\n{}", usage, [&] { std::ostringstream s; s << desc; return s.str(); }());
+    return false;
+  }
+  po::notify(vm);
+  return true;
+}
+
+inline void apply_threads(int threads) {
+#ifdef _OPENMP
+  if (threads > 0) omp_set_num_threads(threads);
+#else
+  (void)threads;
+#endif
+}
+
+/// Prepares the output folder; removes a summary.json left by an earlier run so a failed run never
+/// leaves an old result looking like its own.
+inline std::filesystem::path prepare_output(const std::string& out) {
+  const std::filesystem::path dir(out);
+  io::ensure_directory(dir);
+  std::filesystem::remove(dir / "summary.json");
+  return dir;
+}
+
+/// Runs body() and turns errors into one message and an exit code: 2 bad input, 3 numerical failure,
+/// 4 anything else.
+inline int guarded_main(const char* program, const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const po::error& e) {
+    fmt::print(stderr, "{}: error: {} (see --help)\n", program, e.what());
+    return 2;
+  } catch (const InputError& e) {
+    fmt::print(stderr, "{}: invalid input: {}\n", program, e.what());
+    return 2;
+  } catch (const NumericalError& e) {
+    fmt::print(stderr, "{}: the run failed: {}\n", program, e.what());
+    return 3;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "{}: error: {}\n", program, e.what());
+    return 4;
+  }
+}
+
+inline double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace rsph::examples

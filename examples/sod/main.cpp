@@ -1,0 +1,126 @@
+// rsph-sod: Sod's shock tube in 1D or as a 2D strip, plain SPH, against the exact Riemann solution.
+#include "common/cli.hpp"
+#include "common/run_helpers.hpp"
+#include "rsph/io/csv.hpp"
+#include "rsph/io/hdf5_snapshot.hpp"
+#include "rsph/io/json.hpp"
+#include "rsph/io/progress.hpp"
+#include "sod/scene.hpp"
+
+#include <fmt/format.h>
+
+using namespace rsph;
+namespace ex = rsph::examples;
+
+namespace {
+
+struct Options {
+  scenes::SodParams sod;
+  int dim = 1;
+  std::string kernel = "cubic";
+  int snapshots = 5;
+  ex::CommonOptions common;
+};
+
+template <int D, class Kernel>
+int run(const Options& opt) {
+  const auto dir = ex::prepare_output(opt.common.out);
+  const auto wall0 = std::chrono::steady_clock::now();
+  auto sim = scenes::make_sod<D, Kernel>(opt.sod);
+  const analysis::ExactRiemann exact(opt.sod.left, opt.sod.right, opt.sod.gamma);
+  const auto start = sim.totals();
+
+  ex::ConservationLog<D> log(dir / "conservation.csv");
+  log.record(sim.time(), sim.steps(), start);
+  io::Progress progress(fmt::format("rsph-sod {}D", D), opt.sod.t_end);
+  int snap = 0;
+  const int n_snap = std::max(opt.snapshots, 1);
+  auto write_snap = [&] { io::write_snapshot(dir / io::snapshot_name(static_cast<std::size_t>(snap++)), sim.particles(), sim.time(), sim.steps()); };
+  write_snap();
+  for (int k = 1; k <= n_snap; ++k) {
+    const double t_next = opt.sod.t_end * k / n_snap;
+    sim.run_until(t_next, [&](const auto& s) {
+      log.record(s.time(), s.steps(), s.totals());
+      if (!opt.common.quiet) progress.update(s.time(), s.steps());
+    });
+    write_snap();
+  }
+  progress.finish();
+  log.close();
+  const double wall = ex::seconds_since(wall0);
+
+  const auto& p = sim.particles();
+  io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});
+  for (std::size_t a = 0; a < p.n_real; ++a)
+    parts.row({p.x[a][0], D > 1 ? p.x[a][D - 1] : 0.0, p.rho[a], p.v[a][0], p.P[a], p.u[a]});
+  parts.close();
+  io::CsvWriter ex_csv(dir / "exact.csv", {"x", "rho", "v", "P"});
+  for (int i = 0; i <= 2000; ++i) {
+    const double x = i / 2000.0;
+    const auto q = exact.sample((x - 0.5) / sim.time());
+    ex_csv.row({x, q.rho, q.v, q.P});
+  }
+  ex_csv.close();
+
+  const auto err = scenes::shock_tube_errors(p, exact, sim.time(), 0.5);
+  const auto end = sim.totals();
+  io::Json summary;
+  summary.set("test", "sod").set("dim", D).set("kernel", opt.kernel).set("particles", static_cast<std::uint64_t>(p.n_real));
+  summary.set("time", sim.time()).set("L1_rho", err.L1_rho).set("L1_v", err.L1_v).set("L1_P", err.L1_P);
+  summary.set("energy_error", ex::relative_change(end.total_energy(), start.total_energy()));
+  summary.set("mass_error", ex::relative_change(end.mass, start.mass));
+  summary.set("wall_seconds", wall).set("steps", sim.steps());
+  summary.set("particle_updates_per_second", static_cast<double>(sim.particle_updates()) / wall);
+  summary.set("regularization_seconds", sim.phase_times().regularization);
+  summary.set("phase_seconds", ex::phase_json(sim.phase_times()));
+  summary.set("p_star_exact", exact.p_star()).set("v_star_exact", exact.v_star());
+  summary.write(dir / "summary.json");
+  fmt::print("rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
+             "energy error {:.2e}\n  output: {}\n",
+             D, p.n_real, sim.steps(), wall, err.L1_rho, err.L1_v, err.L1_P,
+             ex::relative_change(end.total_energy(), start.total_energy()), dir.string());
+  return 0;
+}
+
+template <int D>
+int run_kernel(const Options& opt) {
+  if (opt.kernel == "cubic") return run<D, kernel::CubicSpline>(opt);
+  if (opt.kernel == "quintic") return run<D, kernel::QuinticSpline>(opt);
+  if (opt.kernel == "wendland") return run<D, kernel::WendlandC2>(opt);
+  throw InputError("unknown kernel '" + opt.kernel + "' (cubic, quintic, wendland)");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return ex::guarded_main("rsph-sod", [&] {
+    Options opt;
+    ex::po::options_description desc("rsph-sod options");
+    ex::add_common_options(desc, opt.common);
+    desc.add_options()("dim", ex::po::value(&opt.dim)->default_value(1), "1, or 2 for a strip periodic in y")(
+        "n-left", ex::po::value(&opt.sod.n_left)->default_value(400), "particles across the left half")(
+        "ny-left", ex::po::value(&opt.sod.ny_left)->default_value(8), "2D: particles across the strip (left state)")(
+        "h-over-dx", ex::po::value(&opt.sod.h_over_dx)->default_value(1.2), "h / particle spacing")(
+        "alpha", ex::po::value(&opt.sod.alpha)->default_value(1.0), "artificial viscosity alpha")(
+        "beta", ex::po::value(&opt.sod.beta)->default_value(2.0), "artificial viscosity beta")(
+        "t-end", ex::po::value(&opt.sod.t_end)->default_value(0.2), "end time")(
+        "courant", ex::po::value(&opt.sod.courant)->default_value(0.3), "Courant factor")(
+        "kernel", ex::po::value(&opt.kernel)->default_value("cubic"), "cubic, quintic or wendland")(
+        "snapshots", ex::po::value(&opt.snapshots)->default_value(5), "HDF5 snapshots after the initial one");
+    ex::po::variables_map vm;
+    if (!ex::parse(argc, argv, desc, vm,
+                   "rsph-sod: Sod's shock tube with plain SPH against the exact solution.\n"
+                   "Usage: rsph-sod [--dim 1|2] [--preset quick|paper] [--out DIR] ..."))
+      return 0;
+    if (opt.common.preset == "quick") {
+      if (vm["n-left"].defaulted()) opt.sod.n_left = 200;
+      if (vm["snapshots"].defaulted()) opt.snapshots = 2;
+    } else if (opt.common.preset != "paper") {
+      throw InputError("unknown preset '" + opt.common.preset + "' (quick, paper)");
+    }
+    ex::apply_threads(opt.common.threads);
+    if (opt.dim == 1) return run_kernel<1>(opt);
+    if (opt.dim == 2) return run_kernel<2>(opt);
+    throw InputError("--dim must be 1 or 2 (got " + std::to_string(opt.dim) + ")");
+  });
+}

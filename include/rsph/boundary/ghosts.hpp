@@ -1,0 +1,52 @@
+#pragma once
+// Periodic images and mirror ghosts, appended at the tail of the particle arrays.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/particle_set.hpp"
+
+namespace rsph::boundary {
+
+/// Rebuilds the ghosts of `p` for every periodic or reflecting axis of `box`: a particle within
+/// `width` of a face gets a periodic image beyond the opposite face, or a mirror image (normal velocity
+/// reversed) beyond its own face. Axes are processed in turn over real and earlier ghosts, so corners
+/// are covered. Ghosts copy their source's fields; refresh_ghosts updates them after a density sum.
+template <int D, bool E>
+void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
+  p.clear_ghosts();
+  for (int k = 0; k < D; ++k) {
+    if (box.edge[k] == Edge::open) continue;
+    const double lo = box.lo[k], hi = box.hi[k], L = hi - lo;
+    const std::size_t n = p.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      const Vec<D> xi = p.x[i];
+      const Vec<D> vi = p.v[i];
+      if (xi[k] < lo + width) {
+        Vec<D> g = xi, w = vi;
+        if (box.edge[k] == Edge::periodic) g[k] += L;
+        else { g[k] = 2.0 * lo - xi[k]; w[k] = -vi[k]; }
+        p.add_ghost(i, g, w);
+      }
+      if (xi[k] > hi - width) {
+        Vec<D> g = xi, w = vi;
+        if (box.edge[k] == Edge::periodic) g[k] -= L;
+        else { g[k] = 2.0 * hi - xi[k]; w[k] = -vi[k]; }
+        p.add_ghost(i, g, w);
+      }
+    }
+  }
+}
+
+/// Copies the scalar fields a density sum changed from each ghost's real particle.
+template <int D, bool E>
+void refresh_ghosts(ParticleSet<D, E>& p) {
+  const std::size_t n_real = p.n_real;
+  for (std::size_t g = n_real; g < p.size(); ++g) {
+    const std::size_t s = p.ghost_source[g - n_real];
+    p.rho[g] = p.rho[s];
+    p.P[g] = p.P[s];
+    p.cs[g] = p.cs[s];
+    p.h[g] = p.h[s];
+    if constexpr (E) p.u[g] = p.u[s];
+  }
+}
+
+}  // namespace rsph::boundary

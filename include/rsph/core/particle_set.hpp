@@ -1,0 +1,101 @@
+#pragma once
+// Particle data as structure of arrays; ghosts live at the tail, after the n_real real particles.
+#include "rsph/core/dimension.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <type_traits>
+#include <vector>
+
+namespace rsph {
+
+/// Stands in for a field a scene does not carry (u and du_dt of an isothermal gas): it has no storage.
+struct NoField {
+  static constexpr std::size_t size() { return 0; }
+  void resize(std::size_t) {}
+  void clear() {}
+};
+
+template <int D, bool HasEnergy>
+struct ParticleSet {
+  static constexpr int dim = D;
+  static constexpr bool has_energy = HasEnergy;
+  using Scalars = std::vector<double>;
+  using Vectors = std::vector<Vec<D>>;
+  using EnergyField = std::conditional_t<HasEnergy, Scalars, NoField>;
+
+  Scalars m, rho, h, P, cs;
+  Vectors x, v;
+  EnergyField u;  ///< specific internal energy e_a of eq. (4)
+  Vectors dv_dt;
+  EnergyField du_dt;
+  std::vector<std::uint8_t> frozen;         ///< 1: motion prescribed, not integrated
+  std::vector<std::uint32_t> ghost_source;  ///< for ghost g (index n_real + g): its real particle
+  std::size_t n_real = 0;
+
+  std::size_t size() const { return x.size(); }
+  std::size_t n_ghost() const { return size() - n_real; }
+
+  /// Appends one real particle; only valid while there are no ghosts.
+  void add(double mass, const Vec<D>& pos, const Vec<D>& vel, double smoothing, double energy = 0.0) {
+    m.push_back(mass);
+    x.push_back(pos);
+    v.push_back(vel);
+    h.push_back(smoothing);
+    rho.push_back(0.0);
+    P.push_back(0.0);
+    cs.push_back(0.0);
+    dv_dt.push_back(Vec<D>::Zero());
+    if constexpr (HasEnergy) {
+      u.push_back(energy);
+      du_dt.push_back(0.0);
+    }
+    frozen.push_back(0);
+    n_real = x.size();
+  }
+
+  /// Drops every ghost.
+  void clear_ghosts() { resize_all(n_real); ghost_source.clear(); }
+
+  /// Appends a ghost copy of particle `source` (itself possibly a ghost) at `pos` with velocity `vel`.
+  void add_ghost(std::size_t source, const Vec<D>& pos, const Vec<D>& vel) {
+    const std::size_t real = source < n_real ? source : ghost_source[source - n_real];
+    m.push_back(m[source]);
+    x.push_back(pos);
+    v.push_back(vel);
+    h.push_back(h[source]);
+    rho.push_back(rho[source]);
+    P.push_back(P[source]);
+    cs.push_back(cs[source]);
+    dv_dt.push_back(Vec<D>::Zero());
+    if constexpr (HasEnergy) {
+      u.push_back(u[source]);
+      du_dt.push_back(0.0);
+    }
+    frozen.push_back(frozen[source]);
+    ghost_source.push_back(static_cast<std::uint32_t>(real));
+  }
+
+  /// Resizes every field to n (drops the tail; new entries zero).
+  void resize_all(std::size_t n) {
+    m.resize(n);
+    rho.resize(n);
+    h.resize(n);
+    P.resize(n);
+    cs.resize(n);
+    x.resize(n, Vec<D>::Zero());
+    v.resize(n, Vec<D>::Zero());
+    dv_dt.resize(n, Vec<D>::Zero());
+    u.resize(n);
+    du_dt.resize(n);
+    frozen.resize(n);
+  }
+
+  void reserve(std::size_t n) {
+    m.reserve(n); rho.reserve(n); h.reserve(n); P.reserve(n); cs.reserve(n);
+    x.reserve(n); v.reserve(n); dv_dt.reserve(n); frozen.reserve(n);
+    if constexpr (HasEnergy) { u.reserve(n); du_dt.reserve(n); }
+  }
+};
+
+}  // namespace rsph

@@ -1,0 +1,27 @@
+#pragma once
+// The equation-of-state policy axis.
+#include "rsph/core/dimension.hpp"
+
+#include <concepts>
+
+namespace rsph {
+
+/// P(rho, u, x) and c_s(rho, u, x); `has_internal_energy` says whether particles carry u and eq. (4) runs.
+template <class E, int D>
+concept EquationOfState = requires(const E& e, double rho, double u, const Vec<D>& x) {
+  { E::has_internal_energy } -> std::convertible_to<bool>;
+  { e.pressure(rho, u, x) } -> std::same_as<double>;
+  { e.sound_speed(rho, u, x) } -> std::same_as<double>;
+};
+
+template <class E, int D>
+constexpr bool check_equation_of_state() {
+  static_assert(requires { E::has_internal_energy; }, "an equation of state needs `static constexpr bool has_internal_energy` (does the gas carry u?)");
+  static_assert(requires(const E& e, double rho, double u, const Vec<D>& x) { { e.pressure(rho, u, x) } -> std::same_as<double>; },
+                "an equation of state needs `double pressure(double rho, double u, const Vec<D>& x) const`");
+  static_assert(requires(const E& e, double rho, double u, const Vec<D>& x) { { e.sound_speed(rho, u, x) } -> std::same_as<double>; },
+                "an equation of state needs `double sound_speed(double rho, double u, const Vec<D>& x) const`");
+  return true;
+}
+
+}  // namespace rsph

@@ -1,0 +1,41 @@
+#pragma once
+// Time-step criteria: Courant on the signal speed and the force condition (Monaghan 1992 §10).
+#include "rsph/core/errors.hpp"
+#include "rsph/core/particle_set.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace rsph {
+
+struct TimeStepParams {
+  double courant = 0.3;       ///< dt <= courant * h_a / v_sig_a
+  double force = 0.25;        ///< dt <= force * sqrt(h_a / |dv_a/dt|)
+  double dt_max = std::numeric_limits<double>::infinity();
+  double dt_min = 0.0;        ///< a step below this is an error: the run has gone bad
+  bool check_every_step = true;  ///< stop with a NumericalError at the first NaN or negative density/energy
+
+  void validate() const {
+    require(courant > 0.0 && courant <= 1.0, "time step: Courant factor must lie in (0, 1] (got " + std::to_string(courant) + ")");
+    require(force > 0.0, "time step: force factor must be positive");
+    require(dt_max > 0.0, "time step: dt_max must be positive");
+  }
+};
+
+/// min over real, integrated particles of the Courant and force conditions, capped by dt_max.
+template <int D, bool E>
+double stable_time_step(const ParticleSet<D, E>& p, const std::vector<double>& v_sig, const TimeStepParams& params) {
+  double dt = params.dt_max;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    if (p.frozen[a]) continue;
+    if (v_sig[a] > 0.0) dt = std::min(dt, params.courant * p.h[a] / v_sig[a]);
+    const double acc = p.dv_dt[a].norm();
+    if (acc > 0.0) dt = std::min(dt, params.force * std::sqrt(p.h[a] / acc));
+  }
+  return dt;
+}
+
+}  // namespace rsph

@@ -1,0 +1,98 @@
+#pragma once
+// Uniform cell list over the bounding box of a point set: O(N) build, O(1) candidates per point.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace rsph::neighbors {
+
+template <int D>
+class CellList {
+ public:
+  /// Bins x[0..n) into cubic cells of side >= cell_size; every pair closer than cell_size lies in
+  /// adjacent cells.
+  void build(const std::vector<Vec<D>>& x, double cell_size) {
+    require(cell_size > 0.0 && std::isfinite(cell_size), "cell list: the cell size must be positive and finite");
+    const std::size_t n = x.size();
+    lo_ = Vec<D>::Constant(std::numeric_limits<double>::max());
+    Vec<D> hi = Vec<D>::Constant(std::numeric_limits<double>::lowest());
+    for (const auto& p : x) { lo_ = lo_.cwiseMin(p); hi = hi.cwiseMax(p); }
+    if (n == 0) { lo_.setZero(); hi.setZero(); }
+    // Cap the cell count near the particle count so sparse or huge domains stay cheap.
+    double size = cell_size;
+    for (;;) {
+      std::size_t total = 1;
+      for (int k = 0; k < D; ++k) {
+        dims_[k] = std::max<std::int64_t>(1, static_cast<std::int64_t>((hi[k] - lo_[k]) / size) + 1);
+        total *= static_cast<std::size_t>(dims_[k]);
+      }
+      if (total <= 4 * n + 64) break;
+      size *= 1.5;
+    }
+    inv_size_ = 1.0 / size;
+    std::size_t n_cells = 1;
+    for (int k = 0; k < D; ++k) n_cells *= static_cast<std::size_t>(dims_[k]);
+    cell_start_.assign(n_cells + 1, 0);
+    cell_of_.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      cell_of_[i] = cell_index(coords(x[i]));
+      ++cell_start_[cell_of_[i] + 1];
+    }
+    for (std::size_t c = 0; c < n_cells; ++c) cell_start_[c + 1] += cell_start_[c];
+    sorted_.resize(n);
+    std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) sorted_[fill[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
+  }
+
+  /// Calls f(j) for every point j in the 3^D cells around position p.
+  template <class F>
+  void for_each_candidate(const Vec<D>& p, F&& f) const {
+    const auto c = coords(p);
+    std::array<std::int64_t, D> lo, hi;
+    for (int k = 0; k < D; ++k) {
+      lo[k] = std::max<std::int64_t>(0, c[k] - 1);
+      hi[k] = std::min<std::int64_t>(dims_[k] - 1, c[k] + 1);
+    }
+    std::array<std::int64_t, D> idx = lo;
+    for (;;) {
+      const std::size_t cell = cell_index(idx);
+      for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s]);
+      int k = 0;
+      for (; k < D; ++k) {
+        if (++idx[k] <= hi[k]) break;
+        idx[k] = lo[k];
+      }
+      if (k == D) break;
+    }
+  }
+
+  /// The points in cell order: iterating particles this way keeps neighbours close in memory.
+  const std::vector<std::uint32_t>& sorted() const { return sorted_; }
+
+ private:
+  std::array<std::int64_t, D> coords(const Vec<D>& p) const {
+    std::array<std::int64_t, D> c;
+    for (int k = 0; k < D; ++k)
+      c[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - lo_[k]) * inv_size_)), 0, dims_[k] - 1);
+    return c;
+  }
+  std::size_t cell_index(const std::array<std::int64_t, D>& c) const {
+    std::size_t idx = 0;
+    for (int k = D - 1; k >= 0; --k) idx = idx * static_cast<std::size_t>(dims_[k]) + static_cast<std::size_t>(c[k]);
+    return idx;
+  }
+
+  Vec<D> lo_ = Vec<D>::Zero();
+  double inv_size_ = 1.0;
+  std::array<std::int64_t, D> dims_{};
+  std::vector<std::uint32_t> cell_start_, sorted_;
+  std::vector<std::size_t> cell_of_;
+};
+
+}  // namespace rsph::neighbors

@@ -1,0 +1,49 @@
+#pragma once
+// The physics-term policy axis: what a Term may add to a simulation. Each term is one of these kinds;
+// the driver finds out which at compile time, so a term a scene does not name costs nothing.
+#include "rsph/core/dimension.hpp"
+#include "rsph/physics/pair.hpp"
+
+#include <concepts>
+#include <cstddef>
+
+namespace rsph {
+
+/// A dissipation or force term summed over neighbour pairs (artificial viscosity, conductivity, shear).
+template <class T, int D>
+concept PairTerm = requires(const T& t, const physics::Pair<D>& pair) {
+  { t.pair(pair) } -> std::same_as<physics::PairRates<D>>;
+};
+
+/// An external acceleration g(x, t) per particle (point-mass gravity).
+template <class T, int D>
+concept BodyForce = requires(const T& t, const Vec<D>& x, double time) {
+  { t.acceleration(x, time) } -> std::same_as<Vec<D>>;
+};
+
+/// A rule that sets h_a from the local density after each density sum (adaptive smoothing length).
+template <class T>
+concept SmoothingLengthRule = requires(const T& t, double m, double rho, double h) {
+  { t.next_h(m, rho, h) } -> std::same_as<double>;
+};
+
+/// Prescribes x and v of frozen particles at time t (boundary zones moving on fixed orbits).
+template <class T, int D>
+concept PrescribedMotion = requires(const T& t, std::size_t i, Vec<D>& x, Vec<D>& v, double time) {
+  t.prescribe(i, x, v, time);
+};
+
+template <class T, int D>
+concept Term = PairTerm<T, D> || BodyForce<T, D> || SmoothingLengthRule<T> || PrescribedMotion<T, D>;
+
+template <class T, int D>
+constexpr bool check_term() {
+  static_assert(Term<T, D>,
+                "a physics term must provide one of: `PairRates<D> pair(const Pair<D>&) const` (pair term), "
+                "`Vec<D> acceleration(const Vec<D>& x, double t) const` (body force), "
+                "`double next_h(double m, double rho, double h) const` (smoothing-length rule), or "
+                "`void prescribe(size_t i, Vec<D>& x, Vec<D>& v, double t) const` (prescribed motion)");
+  return true;
+}
+
+}  // namespace rsph

@@ -1,0 +1,22 @@
+#pragma once
+// The inviscid SPH equations of the paper, one pair at a time.
+#include "rsph/physics/pair.hpp"
+
+namespace rsph::physics {
+
+/// eq. (2) of the paper: the contribution m_b W_ab to rho_a.
+inline double density_term(double m_b, double W_ab) { return m_b * W_ab; }
+
+/// eq. (3) of the paper without Pi_ab: dv_a/dt += -m_b (P_b / rho_b^2 + P_a / rho_a^2) nabla_a W_ab.
+template <int D>
+inline Vec<D> pressure_acceleration(const Pair<D>& p) {
+  return (-p.m_b * (p.P_b / (p.rho_b * p.rho_b) + p.P_a / (p.rho_a * p.rho_a))) * p.grad_W;
+}
+
+/// eq. (4) of the paper without Pi_ab: de_a/dt += m_b (P_a / rho_a^2) v_ab . nabla_a W_ab.
+template <int D>
+inline double pressure_heating(const Pair<D>& p) {
+  return p.m_b * (p.P_a / (p.rho_a * p.rho_a)) * p.v_ab.dot(p.grad_W);
+}
+
+}  // namespace rsph::physics

@@ -1,0 +1,26 @@
+#pragma once
+// What one pair (a, b) knows, and what a pair term returns. Built once per pair by the loop driver.
+#include "rsph/core/dimension.hpp"
+
+namespace rsph::physics {
+
+template <int D>
+struct Pair {
+  Vec<D> r_ab;     ///< x_a - x_b
+  Vec<D> v_ab;     ///< v_a - v_b
+  Vec<D> grad_W;   ///< nabla_a W(r_ab, h_ab)
+  double r;        ///< |r_ab|
+  double h_ab;     ///< (h_a + h_b) / 2
+  double m_a, m_b, rho_a, rho_b, P_a, P_b, cs_a, cs_b;
+  double u_a = 0.0, u_b = 0.0;  ///< specific internal energies, zero when the gas carries none
+};
+
+/// Contribution of b to the rates of a.
+template <int D>
+struct PairRates {
+  Vec<D> dv_dt = Vec<D>::Zero();
+  double du_dt = 0.0;
+  double v_sig = 0.0;  ///< signal speed for the Courant condition
+};
+
+}  // namespace rsph::physics

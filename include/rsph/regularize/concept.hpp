@@ -1,0 +1,47 @@
+#pragma once
+// The regularization policy axis: the one thing that tells RSPH from SPH.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/particle_set.hpp"
+
+#include <concepts>
+#include <cstdint>
+
+namespace rsph {
+
+/// What a schedule may look at when deciding whether to regularize.
+struct StepInfo {
+  std::uint64_t step = 0;             ///< steps taken so far
+  double time = 0.0;                  ///< simulated time
+  std::uint64_t steps_since_last = 0; ///< steps since the last regularization (or the start)
+  double time_since_last = 0.0;
+};
+
+/// A regularizer decides when (`due`) and remaps the particles onto a new set (`remap`) conserving
+/// mass, momentum and total energy. `remap` returns the kinetic energy it removed.
+template <class R, int D, bool E>
+concept Regularizer = requires(R& r, ParticleSet<D, E>& p, const Box<D>& box, const StepInfo& s) {
+  { r.due(p, box, s) } -> std::same_as<bool>;
+  { r.remap(p, box) } -> std::convertible_to<double>;
+};
+
+template <class R, int D, bool E>
+constexpr bool check_regularizer() {
+  static_assert(requires(R& r, ParticleSet<D, E>& p, const Box<D>& box, const StepInfo& s) { { r.due(p, box, s) } -> std::same_as<bool>; },
+                "a regularizer needs `bool due(const ParticleSet<D, E>&, const Box<D>&, const StepInfo&)`: when to remap");
+  static_assert(requires(R& r, ParticleSet<D, E>& p, const Box<D>& box) { { r.remap(p, box) } -> std::convertible_to<double>; },
+                "a regularizer needs `double remap(ParticleSet<D, E>&, const Box<D>&)`: the remap, returning the kinetic energy removed");
+  return true;
+}
+
+namespace regularize {
+
+/// Plain SPH: never regularize.
+struct None {
+  template <class P, class B>
+  bool due(const P&, const B&, const StepInfo&) const { return false; }
+  template <class P, class B>
+  double remap(P&, const B&) { return 0.0; }
+};
+
+}  // namespace regularize
+}  // namespace rsph

@@ -1,0 +1,340 @@
+#pragma once
+// Composes the policies into a simulation. Owns the policies and the particle set, nothing else:
+// pair physics live in physics/, neighbour search in neighbors/, ghosts in boundary/.
+#include "rsph/boundary/ghosts.hpp"
+#include "rsph/core/diagnostics.hpp"
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+#include "rsph/core/particle_set.hpp"
+#include "rsph/eos/concept.hpp"
+#include "rsph/integrate/time_step.hpp"
+#include "rsph/kernel/concept.hpp"
+#include "rsph/kernel/kernel.hpp"
+#include "rsph/neighbors/cell_list.hpp"
+#include "rsph/neighbors/neighbor_list.hpp"
+#include "rsph/physics/concept.hpp"
+#include "rsph/physics/hydro.hpp"
+#include "rsph/regularize/concept.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+namespace rsph {
+
+/// Seconds spent in each phase, accumulated over the run.
+struct PhaseTimes {
+  double neighbors = 0.0, density = 0.0, forces = 0.0, integrate = 0.0, regularization = 0.0;
+  double total() const { return neighbors + density + forces + integrate + regularization; }
+};
+
+template <int D, class Kernel, class EOS, class Reg, class... Terms>
+  requires SupportedDimension<D>
+class Simulation {
+  static_assert(check_kernel<Kernel, D>());
+  static_assert(check_equation_of_state<EOS, D>());
+  static_assert(check_regularizer<Reg, D, EOS::has_internal_energy>());
+  static_assert((check_term<Terms, D>() && ...));
+
+ public:
+  static constexpr int dim = D;
+  static constexpr bool has_energy = EOS::has_internal_energy;
+  using Particles = ParticleSet<D, has_energy>;
+  using KernelType = Kernel;
+
+  Simulation(Particles particles, Box<D> box, EOS eos, Reg reg, TimeStepParams params, Terms... terms)
+      : p_(std::move(particles)), box_(box), eos_(std::move(eos)), reg_(std::move(reg)), params_(params),
+        terms_(std::move(terms)...) {
+    validate();
+    compute_rates();
+  }
+
+  const Particles& particles() const { return p_; }
+  /// Mutable access for scene set-up between steps; call compute_rates() after changing fields.
+  Particles& particles() { return p_; }
+  const Box<D>& box() const { return box_; }
+  const EOS& eos() const { return eos_; }
+  const Reg& regularizer() const { return reg_; }
+  Reg& regularizer() { return reg_; }
+  const neighbors::NeighborList& neighbor_list() const { return nl_; }
+  double time() const { return time_; }
+  std::uint64_t steps() const { return step_; }
+  std::uint64_t particle_updates() const { return particle_updates_; }
+  std::uint64_t regularizations() const { return regularizations_; }
+  double kinetic_energy_removed() const { return kinetic_removed_; }
+  const PhaseTimes& phase_times() const { return times_; }
+  Conservation<D> totals() const { return conservation(p_); }
+
+  /// The next time step: the Courant and force conditions over all real, integrated particles.
+  double time_step() const { return stable_time_step(p_, v_sig_, params_); }
+
+  /// One kick-drift-kick leapfrog step of at most dt_limit; regularizes afterwards when due.
+  /// Returns the step taken.
+  double step(double dt_limit = std::numeric_limits<double>::infinity()) {
+    const double dt = std::min(time_step(), dt_limit);
+    if (!(dt > params_.dt_min))
+      throw NumericalError("time step " + std::to_string(dt) + " fell below the minimum " +
+                           std::to_string(params_.dt_min) + " at t = " + std::to_string(time_));
+    auto t0 = clock::now();
+    const std::size_t n = p_.n_real;
+    v_half_.resize(n);
+    if constexpr (has_energy) u_half_.resize(n);
+    for (std::size_t a = 0; a < n; ++a) {
+      if (p_.frozen[a]) continue;
+      v_half_[a] = p_.v[a] + 0.5 * dt * p_.dv_dt[a];
+      p_.x[a] += dt * v_half_[a];
+      keep_inside(a);
+      p_.v[a] = v_half_[a] + 0.5 * dt * p_.dv_dt[a];  // predicted end-of-step velocity for the rates
+      if constexpr (has_energy) {
+        u_half_[a] = p_.u[a] + 0.5 * dt * p_.du_dt[a];
+        p_.u[a] = std::max(0.0, u_half_[a] + 0.5 * dt * p_.du_dt[a]);
+      }
+    }
+    time_ += dt;
+    prescribe_frozen();
+    times_.integrate += seconds_since(t0);
+    compute_rates();
+    t0 = clock::now();
+    for (std::size_t a = 0; a < n; ++a) {
+      if (p_.frozen[a]) continue;
+      p_.v[a] = v_half_[a] + 0.5 * dt * p_.dv_dt[a];
+      if constexpr (has_energy) p_.u[a] = u_half_[a] + 0.5 * dt * p_.du_dt[a];
+    }
+    times_.integrate += seconds_since(t0);
+    ++step_;
+    ++info_.steps_since_last;
+    info_.time_since_last += dt;
+    particle_updates_ += n;
+    info_.step = step_;
+    info_.time = time_;
+    if (reg_.due(p_, box_, info_)) regularize_now();
+    if (params_.check_every_step) check_physical();
+    return dt;
+  }
+
+  /// Regularizes now, whatever the schedule says.
+  void regularize_now() {
+    const auto t0 = clock::now();
+    p_.clear_ghosts();
+    kinetic_removed_ += reg_.remap(p_, box_);
+    ++regularizations_;
+    info_.steps_since_last = 0;
+    info_.time_since_last = 0.0;
+    times_.regularization += seconds_since(t0);
+    compute_rates();
+  }
+
+  /// Steps until t_end, calling on_step(*this) after each step.
+  template <class OnStep>
+  void run_until(double t_end, OnStep&& on_step) {
+    while (time_ < t_end * (1.0 - 1e-14)) {
+      step(t_end - time_);
+      on_step(*this);
+    }
+  }
+  void run_until(double t_end) { run_until(t_end, [](const Simulation&) {}); }
+
+  /// Ghosts, neighbours, density (eq. 2), pressure, then accelerations (eq. 3) and heating (eq. 4).
+  void compute_rates() {
+    auto t0 = clock::now();
+    const std::size_t n = p_.n_real;
+    double h_max = 0.0;
+    for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
+    const double reach = Kernel::support * h_max;
+    boundary::make_ghosts(p_, box_, reach);
+    cells_.build(p_.x, reach);
+    neighbors::build_neighbor_list<D>(p_.x, p_.h, n, Kernel::support, cells_, nl_);
+    times_.neighbors += seconds_since(t0);
+
+    t0 = clock::now();
+    compute_density();
+    times_.density += seconds_since(t0);
+
+    t0 = clock::now();
+    compute_forces();
+    update_smoothing_lengths();
+    times_.forces += seconds_since(t0);
+  }
+
+  /// The density sum alone (eq. 2) with P and c_s, over current neighbour lists; for benchmarks.
+  void compute_density() {
+    const std::size_t n = p_.n_real;
+    const auto& x = p_.x;
+    const auto& h = p_.h;
+    const auto& m = p_.m;
+#pragma omp parallel for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) {
+      double rho = m[a] * kernel::W<Kernel, D>(0.0, h[a]);
+      for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+        const std::uint32_t b = nl_.index[k];
+        const double r = (x[a] - x[b]).norm();
+        rho += physics::density_term(m[b], kernel::W<Kernel, D>(r, 0.5 * (h[a] + h[b])));
+      }
+      p_.rho[a] = rho;
+      const double u = energy_of(a);
+      p_.P[a] = eos_.pressure(rho, u, x[a]);
+      p_.cs[a] = eos_.sound_speed(rho, u, x[a]);
+    }
+    boundary::refresh_ghosts(p_);
+  }
+
+  /// Accelerations and heating rates over current neighbour lists and densities; for benchmarks.
+  void compute_forces() {
+    const std::size_t n = p_.n_real;
+    v_sig_.resize(n);
+#pragma omp parallel for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) {
+      Vec<D> dv = Vec<D>::Zero();
+      double du = 0.0;
+      double v_sig = p_.cs[a];
+      physics::Pair<D> pr;
+      pr.m_a = p_.m[a];
+      pr.rho_a = p_.rho[a];
+      pr.P_a = p_.P[a];
+      pr.cs_a = p_.cs[a];
+      pr.u_a = energy_of(a);
+      for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+        const std::uint32_t b = nl_.index[k];
+        pr.r_ab = p_.x[a] - p_.x[b];
+        pr.r = pr.r_ab.norm();
+        if (pr.r <= 0.0) continue;
+        pr.v_ab = p_.v[a] - p_.v[b];
+        pr.h_ab = 0.5 * (p_.h[a] + p_.h[b]);
+        pr.grad_W = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, pr.h_ab);
+        pr.m_b = p_.m[b];
+        pr.rho_b = p_.rho[b];
+        pr.P_b = p_.P[b];
+        pr.cs_b = p_.cs[b];
+        pr.u_b = energy_of(b);
+        dv += physics::pressure_acceleration(pr);
+        if constexpr (has_energy) du += physics::pressure_heating(pr);
+        std::apply([&](const auto&... term) { (add_pair_term(term, pr, dv, du, v_sig), ...); }, terms_);
+      }
+      std::apply([&](const auto&... term) { (add_body_force(term, p_.x[a], dv), ...); }, terms_);
+      p_.dv_dt[a] = dv;
+      if constexpr (has_energy) p_.du_dt[a] = du;
+      v_sig_[a] = v_sig;
+    }
+  }
+
+ private:
+  using clock = std::chrono::steady_clock;
+  static double seconds_since(clock::time_point t0) {
+    return std::chrono::duration<double>(clock::now() - t0).count();
+  }
+
+  double energy_of(std::size_t a) const {
+    if constexpr (has_energy) return p_.u[a];
+    else return 0.0;
+  }
+
+  template <class T>
+  static void add_pair_term(const T& term, const physics::Pair<D>& pr, Vec<D>& dv, double& du, double& v_sig) {
+    if constexpr (PairTerm<T, D>) {
+      const physics::PairRates<D> r = term.pair(pr);
+      dv += r.dv_dt;
+      if constexpr (has_energy) du += r.du_dt;
+      v_sig = std::max(v_sig, r.v_sig);
+    }
+  }
+
+  template <class T>
+  void add_body_force(const T& term, const Vec<D>& x, Vec<D>& dv) const {
+    if constexpr (BodyForce<T, D>) dv += term.acceleration(x, time_);
+  }
+
+  void update_smoothing_lengths() {
+    std::apply(
+        [&](const auto&... term) {
+          auto apply_rule = [&](const auto& t) {
+            if constexpr (SmoothingLengthRule<std::decay_t<decltype(t)>>)
+              for (std::size_t a = 0; a < p_.n_real; ++a) p_.h[a] = t.next_h(p_.m[a], p_.rho[a], p_.h[a]);
+          };
+          (apply_rule(term), ...);
+        },
+        terms_);
+  }
+
+  void prescribe_frozen() {
+    std::apply(
+        [&](const auto&... term) {
+          auto apply_motion = [&](const auto& t) {
+            if constexpr (PrescribedMotion<std::decay_t<decltype(t)>, D>)
+              for (std::size_t a = 0; a < p_.n_real; ++a)
+                if (p_.frozen[a]) t.prescribe(a, p_.x[a], p_.v[a], time_);
+          };
+          (apply_motion(term), ...);
+        },
+        terms_);
+  }
+
+  // A particle that crossed a reflecting wall is mirrored back; one that left a periodic axis re-enters.
+  void keep_inside(std::size_t a) {
+    for (int k = 0; k < D; ++k) {
+      if (box_.edge[k] == Edge::reflecting) {
+        if (p_.x[a][k] < box_.lo[k]) { p_.x[a][k] = 2.0 * box_.lo[k] - p_.x[a][k]; v_half_[a][k] = -v_half_[a][k]; }
+        if (p_.x[a][k] > box_.hi[k]) { p_.x[a][k] = 2.0 * box_.hi[k] - p_.x[a][k]; v_half_[a][k] = -v_half_[a][k]; }
+      }
+    }
+    box_.wrap(p_.x[a]);
+  }
+
+  void validate() {
+    require(p_.n_real > 0, "the domain holds no particles");
+    require(p_.n_real == p_.size(), "initial particle sets must not contain ghosts");
+    for (int k = 0; k < D; ++k)
+      require(box_.hi[k] > box_.lo[k], "the box is empty along axis " + std::to_string(k) + " (hi <= lo)");
+    params_.validate();
+    validate_policy(eos_);
+    std::apply([&](const auto&... term) { (validate_policy(term), ...); }, terms_);
+    for (std::size_t a = 0; a < p_.n_real; ++a) {
+      const std::string who = "particle " + std::to_string(a) + ": ";
+      require(p_.m[a] > 0.0 && std::isfinite(p_.m[a]), who + "mass must be positive and finite");
+      require(p_.h[a] > 0.0 && std::isfinite(p_.h[a]), who + "smoothing length h must be positive and finite");
+      require(p_.x[a].allFinite() && p_.v[a].allFinite(), who + "position and velocity must be finite");
+      if constexpr (has_energy) require(p_.u[a] >= 0.0 && std::isfinite(p_.u[a]), who + "internal energy must be non-negative");
+      for (int k = 0; k < D; ++k)
+        if (box_.edge[k] != Edge::open)
+          require(p_.x[a][k] >= box_.lo[k] && p_.x[a][k] <= box_.hi[k], who + "lies outside the box along axis " + std::to_string(k));
+    }
+  }
+
+  template <class T>
+  static void validate_policy(const T& t) {
+    if constexpr (requires { t.validate(); }) t.validate();
+  }
+
+  void check_physical() const {
+    const auto [a, what] = first_unphysical(p_);
+    if (!what.empty())
+      throw NumericalError("particle " + std::to_string(a) + ": " + what + " at t = " + std::to_string(time_) +
+                           " (step " + std::to_string(step_) + ")");
+  }
+
+  Particles p_;
+  Box<D> box_;
+  EOS eos_;
+  Reg reg_;
+  TimeStepParams params_;
+  std::tuple<Terms...> terms_;
+
+  neighbors::CellList<D> cells_;
+  neighbors::NeighborList nl_;
+  std::vector<double> v_sig_;
+  std::vector<Vec<D>> v_half_;
+  typename Particles::EnergyField u_half_;
+  double time_ = 0.0;
+  std::uint64_t step_ = 0;
+  std::uint64_t particle_updates_ = 0;
+  std::uint64_t regularizations_ = 0;
+  double kinetic_removed_ = 0.0;
+  StepInfo info_;
+  PhaseTimes times_;
+};
+
+}  // namespace rsph
