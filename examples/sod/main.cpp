@@ -105,6 +105,7 @@ int main(int argc, char** argv) {
         "beta", ex::po::value(&opt.sod.beta)->default_value(2.0), "artificial viscosity beta")(
         "t-end", ex::po::value(&opt.sod.t_end)->default_value(0.2), "end time")(
         "courant", ex::po::value(&opt.sod.courant)->default_value(0.3), "Courant factor")(
+        "gamma", ex::po::value(&opt.sod.gamma)->default_value(1.4), "ratio of specific heats")(
         "kernel", ex::po::value(&opt.kernel)->default_value("cubic"), "cubic, quintic or wendland")(
         "snapshots", ex::po::value(&opt.snapshots)->default_value(5), "HDF5 snapshots after the initial one");
     ex::po::variables_map vm;

@@ -29,7 +29,7 @@ struct SodParams {
 
 template <int D, class Kernel>
 using SodSimulation = Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity,
-                                 physics::DensityAdaptiveH<D>>;
+                                 physics::GradH<D>>;
 
 /// Equal-mass particles in 1D (spacing ratio 8 across the membrane); in 2D a lattice of spacing dx on
 /// the left and 2 dx on the right so both tile the periodic strip (masses differ by the density ratio
@@ -75,7 +75,7 @@ SodSimulation<D, Kernel> make_sod(const SodParams& s) {
   TimeStepParams ts;
   ts.courant = s.courant;
   return SodSimulation<D, Kernel>(std::move(p), box, gas, regularize::None{}, ts,
-                                  physics::ArtificialViscosity{s.alpha, s.beta}, physics::DensityAdaptiveH<D>{s.h_over_dx});
+                                  physics::ArtificialViscosity{s.alpha, s.beta}, physics::GradH<D>{s.h_over_dx});
 }
 
 struct ShockTubeErrors {

@@ -14,6 +14,7 @@
 #include "rsph/neighbors/neighbor_list.hpp"
 #include "rsph/physics/concept.hpp"
 #include "rsph/physics/hydro.hpp"
+#include "rsph/physics/smoothing_length.hpp"
 #include "rsph/regularize/concept.hpp"
 
 #include <algorithm>
@@ -44,6 +45,10 @@ class Simulation {
  public:
   static constexpr int dim = D;
   static constexpr bool has_energy = EOS::has_internal_energy;
+  /// Equal-mass SPH with h solved from the density (a SmoothingLengthSolver term); otherwise h is fixed
+  /// between regularizations and pairs use h_ab = (h_a + h_b) / 2 as in the paper.
+  static constexpr bool grad_h = (SmoothingLengthSolver<Terms> || ...);
+  static_assert((int(SmoothingLengthSolver<Terms>) + ... + 0) <= 1, "a simulation takes at most one smoothing-length solver");
   using Particles = ParticleSet<D, has_energy>;
   using KernelType = Kernel;
 
@@ -141,23 +146,27 @@ class Simulation {
 
   /// Ghosts, neighbours, density (eq. 2), pressure, then accelerations (eq. 3) and heating (eq. 4).
   void compute_rates() {
+    if constexpr (grad_h) {
+      // Neighbours with a margin, so h may grow while it is solved; rebuilt if it outgrows the margin.
+      for (int attempt = 0;; ++attempt) {
+        build_neighbors(kHMargin);
+        auto t0 = clock::now();
+        const bool fits = solve_density_and_h(kHMargin);
+        times_.density += seconds_since(t0);
+        if (fits) break;
+        if (attempt == 4) throw NumericalError("smoothing lengths keep outgrowing their neighbour search at t = " + std::to_string(time_));
+      }
+      auto t0 = clock::now();
+      update_pressure();
+      times_.density += seconds_since(t0);
+    } else {
+      build_neighbors(1.0);
+      auto t0 = clock::now();
+      compute_density();
+      times_.density += seconds_since(t0);
+    }
     auto t0 = clock::now();
-    const std::size_t n = p_.n_real;
-    double h_max = 0.0;
-    for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
-    const double reach = Kernel::support * h_max;
-    boundary::make_ghosts(p_, box_, reach);
-    cells_.build(p_.x, reach);
-    neighbors::build_neighbor_list<D>(p_.x, p_.h, n, Kernel::support, cells_, nl_);
-    times_.neighbors += seconds_since(t0);
-
-    t0 = clock::now();
-    compute_density();
-    times_.density += seconds_since(t0);
-
-    t0 = clock::now();
     compute_forces();
-    update_smoothing_lengths();
     times_.forces += seconds_since(t0);
   }
 
@@ -176,11 +185,8 @@ class Simulation {
         rho += physics::density_term(m[b], kernel::W<Kernel, D>(r, 0.5 * (h[a] + h[b])));
       }
       p_.rho[a] = rho;
-      const double u = energy_of(a);
-      p_.P[a] = eos_.pressure(rho, u, x[a]);
-      p_.cs[a] = eos_.sound_speed(rho, u, x[a]);
     }
-    boundary::refresh_ghosts(p_);
+    update_pressure();
   }
 
   /// Accelerations and heating rates over current neighbour lists and densities; for benchmarks.
@@ -198,21 +204,34 @@ class Simulation {
       pr.P_a = p_.P[a];
       pr.cs_a = p_.cs[a];
       pr.u_a = energy_of(a);
+      const double h_a = p_.h[a];
+      if constexpr (grad_h) pr.Omega_a = Omega_[a];
       for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
         const std::uint32_t b = nl_.index[k];
         pr.r_ab = p_.x[a] - p_.x[b];
         pr.r = pr.r_ab.norm();
         if (pr.r <= 0.0) continue;
+        const double h_b = p_.h[b];
         pr.v_ab = p_.v[a] - p_.v[b];
-        pr.h_ab = 0.5 * (p_.h[a] + p_.h[b]);
-        pr.grad_W = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, pr.h_ab);
+        pr.h_ab = 0.5 * (h_a + h_b);
         pr.m_b = p_.m[b];
         pr.rho_b = p_.rho[b];
         pr.P_b = p_.P[b];
         pr.cs_b = p_.cs[b];
         pr.u_b = energy_of(b);
-        dv += physics::pressure_acceleration(pr);
-        if constexpr (has_energy) du += physics::pressure_heating(pr);
+        if constexpr (grad_h) {
+          if (pr.r >= Kernel::support * std::max(h_a, h_b)) continue;  // margin of the search only
+          pr.grad_W_a = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, h_a);
+          pr.grad_W_b = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, h_b);
+          pr.grad_W = 0.5 * (pr.grad_W_a + pr.grad_W_b);
+          pr.Omega_b = Omega_[b];
+          dv += physics::pressure_acceleration_grad_h(pr);
+          if constexpr (has_energy) du += physics::pressure_heating_grad_h(pr);
+        } else {
+          pr.grad_W = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, pr.h_ab);
+          dv += physics::pressure_acceleration(pr);
+          if constexpr (has_energy) du += physics::pressure_heating(pr);
+        }
         std::apply([&](const auto&... term) { (add_pair_term(term, pr, dv, du, v_sig), ...); }, terms_);
       }
       std::apply([&](const auto&... term) { (add_body_force(term, p_.x[a], dv), ...); }, terms_);
@@ -248,16 +267,82 @@ class Simulation {
     if constexpr (BodyForce<T, D>) dv += term.acceleration(x, time_);
   }
 
-  void update_smoothing_lengths() {
-    std::apply(
-        [&](const auto&... term) {
-          auto apply_rule = [&](const auto& t) {
-            if constexpr (SmoothingLengthRule<std::decay_t<decltype(t)>>)
-              for (std::size_t a = 0; a < p_.n_real; ++a) p_.h[a] = t.next_h(p_.m[a], p_.rho[a], p_.h[a]);
-          };
-          (apply_rule(term), ...);
-        },
-        terms_);
+  static constexpr double kHMargin = 1.25;  // search radius over h while h is solved
+
+  static constexpr std::size_t solver_index() {
+    std::size_t i = 0, found = 0;
+    ((SmoothingLengthSolver<Terms> ? (found = i, ++i) : ++i), ...);
+    return found;
+  }
+  const auto& h_solver() const { return std::get<solver_index()>(terms_); }
+
+  void build_neighbors(double margin) {
+    const auto t0 = clock::now();
+    const std::size_t n = p_.n_real;
+    double h_max = 0.0;
+    for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
+    const double reach = Kernel::support * h_max * margin;
+    boundary::make_ghosts(p_, box_, reach);
+    cells_.build(p_.x, reach);
+    if constexpr (grad_h)
+      neighbors::build_neighbor_list<D>(p_.x, p_.h, n, neighbors::MaxH{Kernel::support, margin}, cells_, nl_);
+    else
+      neighbors::build_neighbor_list<D>(p_.x, p_.h, n, neighbors::MeanH{Kernel::support}, cells_, nl_);
+    times_.neighbors += seconds_since(t0);
+  }
+
+  /// Newton-Raphson on rho_sum(h) - rho_h(h) = 0 per particle (Price 2012 §3.1), bisection-guarded;
+  /// sets h, rho and Omega. Returns false when some h outgrew the neighbour search margin.
+  bool solve_density_and_h(double margin) {
+    const std::size_t n = p_.n_real;
+    const auto& solver = h_solver();
+    Omega_.assign(p_.size(), 1.0);
+    bool fits = true;
+#pragma omp parallel for schedule(static) reduction(&& : fits)
+    for (std::size_t a = 0; a < n; ++a) {
+      const double m_a = p_.m[a];
+      const double h_search = p_.h[a] * margin;
+      double h = p_.h[a], lo = 0.0, hi = h_search;
+      double rho = 0.0, sum_dW_dh = 0.0;
+      for (int it = 0; it < solver.max_iterations; ++it) {
+        rho = m_a * kernel::W<Kernel, D>(0.0, h);
+        sum_dW_dh = m_a * physics::dW_dh<Kernel, D>(0.0, h);
+        const double r_max = Kernel::support * h;
+        for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+          const std::uint32_t b = nl_.index[k];
+          const double r = (p_.x[a] - p_.x[b]).norm();
+          if (r >= r_max) continue;
+          rho += p_.m[b] * kernel::W<Kernel, D>(r, h);
+          sum_dW_dh += p_.m[b] * physics::dW_dh<Kernel, D>(r, h);
+        }
+        const double rho_h = solver.rho_of_h(m_a, h);
+        const double f = rho - rho_h;
+        if (std::abs(f) <= solver.tolerance * rho_h) break;
+        if (f > 0.0) hi = h; else lo = h;  // f rises with h: rho_h falls as h^-D
+        const double df = sum_dW_dh + D * rho_h / h;
+        double next = df != 0.0 ? h - f / df : 0.5 * (lo + hi);
+        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+        h = next;
+      }
+      p_.h[a] = h;
+      p_.rho[a] = rho;
+      Omega_[a] = physics::omega<D>(h, rho, sum_dW_dh);
+      if (h >= h_search * (1.0 - 1e-12)) fits = false;
+    }
+    return fits;
+  }
+
+  void update_pressure() {
+    const std::size_t n = p_.n_real;
+#pragma omp parallel for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) {
+      const double u = energy_of(a);
+      p_.P[a] = eos_.pressure(p_.rho[a], u, p_.x[a]);
+      p_.cs[a] = eos_.sound_speed(p_.rho[a], u, p_.x[a]);
+    }
+    boundary::refresh_ghosts(p_);
+    if constexpr (grad_h)
+      for (std::size_t g = n; g < p_.size(); ++g) Omega_[g] = Omega_[p_.ghost_source[g - n]];
   }
 
   void prescribe_frozen() {
@@ -326,6 +411,7 @@ class Simulation {
   neighbors::CellList<D> cells_;
   neighbors::NeighborList nl_;
   std::vector<double> v_sig_;
+  std::vector<double> Omega_;  ///< grad-h factors (real and ghosts), only with a smoothing-length solver
   std::vector<Vec<D>> v_half_;
   typename Particles::EnergyField u_half_;
   double time_ = 0.0;

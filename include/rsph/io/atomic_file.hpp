@@ -9,7 +9,10 @@
 namespace rsph::io {
 
 inline std::filesystem::path temporary_sibling(const std::filesystem::path& target) {
-  return target.parent_path() / ("." + target.filename().string() + ".partial");
+  std::string name = ".";  // built step by step: GCC 12 misreports -Wrestrict on "." + s + "..."
+  name += target.filename().string();
+  name += ".partial";
+  return target.parent_path() / name;
 }
 
 /// Renames the finished temporary file onto its target.

@@ -21,10 +21,24 @@ struct NeighborList {
   std::size_t pairs() const { return index.size(); }
 };
 
-/// Neighbours of the first n_query points among all of x (ghosts included), found through `cells`.
-template <int D>
+/// Interaction radius of the paper's eqs. (2)-(4): support * (h_a + h_b) / 2.
+struct MeanH {
+  double support;
+  double operator()(double ha, double hb) const { return support * 0.5 * (ha + hb); }
+};
+/// Interaction radius of grad-h SPH, where a and b each see the other with their own h:
+/// support * max(h_a, h_b), times a margin for h growing while it is solved.
+struct MaxH {
+  double support;
+  double margin = 1.0;
+  double operator()(double ha, double hb) const { return support * margin * std::max(ha, hb); }
+};
+
+/// Neighbours of the first n_query points among all of x (ghosts included), found through `cells`:
+/// every b != a with |x_a - x_b| < reach(h_a, h_b).
+template <int D, class Reach>
 void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>& h, std::size_t n_query,
-                         double support, const CellList<D>& cells, NeighborList& out) {
+                         Reach reach_of, const CellList<D>& cells, NeighborList& out) {
   out.offset.assign(n_query + 1, 0);
   int n_threads = 1;
 #ifdef _OPENMP
@@ -48,7 +62,7 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
       std::uint64_t n = 0;
       cells.for_each_candidate(xa, [&](std::uint32_t b) {
         if (b == a) return;
-        const double reach = support * 0.5 * (ha + h[b]);
+        const double reach = reach_of(ha, h[b]);
         if ((xa - x[b]).squaredNorm() < reach * reach) {
           buf.push_back(b);
           ++n;
@@ -66,18 +80,18 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
   }
 }
 
-/// O(N^2) oracle: every b with |separation(x_a, x_b)| < support * h_ab, using minimum images when
+/// O(N^2) oracle: every b with |separation(x_a, x_b)| < reach(h_a, h_b), using minimum images when
 /// `box` has periodic axes. Returns (a, b) pairs for a < n_query.
-template <int D>
+template <int D, class Reach>
 std::vector<std::pair<std::uint32_t, std::uint32_t>> brute_force_pairs(const std::vector<Vec<D>>& x,
                                                                        const std::vector<double>& h,
-                                                                       std::size_t n_query, double support,
+                                                                       std::size_t n_query, Reach reach_of,
                                                                        const Box<D>& box) {
   std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
   for (std::size_t a = 0; a < n_query; ++a)
     for (std::size_t b = 0; b < x.size(); ++b) {
       if (a == b) continue;
-      const double reach = support * 0.5 * (h[a] + h[b]);
+      const double reach = reach_of(h[a], h[b]);
       if (box.separation(x[a], x[b]).squaredNorm() < reach * reach)
         pairs.emplace_back(static_cast<std::uint32_t>(a), static_cast<std::uint32_t>(b));
     }

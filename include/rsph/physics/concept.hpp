@@ -21,10 +21,13 @@ concept BodyForce = requires(const T& t, const Vec<D>& x, double time) {
   { t.acceleration(x, time) } -> std::same_as<Vec<D>>;
 };
 
-/// A rule that sets h_a from the local density after each density sum (adaptive smoothing length).
+/// Adaptive smoothing lengths solved with the density (grad-h SPH); the driver switches to the grad-h
+/// density and force sums when a scene names one.
 template <class T>
-concept SmoothingLengthRule = requires(const T& t, double m, double rho, double h) {
-  { t.next_h(m, rho, h) } -> std::same_as<double>;
+concept SmoothingLengthSolver = requires(const T& t, double m, double rho, double h) {
+  requires T::solves_smoothing_length;
+  { t.rho_of_h(m, h) } -> std::same_as<double>;
+  { t.h_of_rho(m, rho) } -> std::same_as<double>;
 };
 
 /// Prescribes x and v of frozen particles at time t (boundary zones moving on fixed orbits).
@@ -34,14 +37,14 @@ concept PrescribedMotion = requires(const T& t, std::size_t i, Vec<D>& x, Vec<D>
 };
 
 template <class T, int D>
-concept Term = PairTerm<T, D> || BodyForce<T, D> || SmoothingLengthRule<T> || PrescribedMotion<T, D>;
+concept Term = PairTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> || PrescribedMotion<T, D>;
 
 template <class T, int D>
 constexpr bool check_term() {
   static_assert(Term<T, D>,
                 "a physics term must provide one of: `PairRates<D> pair(const Pair<D>&) const` (pair term), "
                 "`Vec<D> acceleration(const Vec<D>& x, double t) const` (body force), "
-                "`double next_h(double m, double rho, double h) const` (smoothing-length rule), or "
+                "`solves_smoothing_length` with `rho_of_h` and `h_of_rho` (adaptive h), or "
                 "`void prescribe(size_t i, Vec<D>& x, Vec<D>& v, double t) const` (prescribed motion)");
   return true;
 }

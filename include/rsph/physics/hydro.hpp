@@ -19,4 +19,18 @@ inline double pressure_heating(const Pair<D>& p) {
   return p.m_b * (p.P_a / (p.rho_a * p.rho_a)) * p.v_ab.dot(p.grad_W);
 }
 
+/// Price 2012 eq. 34 (grad-h SPH), inviscid part:
+/// dv_a/dt += -m_b [P_a / (Omega_a rho_a^2) nabla_a W_ab(h_a) + P_b / (Omega_b rho_b^2) nabla_a W_ab(h_b)].
+template <int D>
+inline Vec<D> pressure_acceleration_grad_h(const Pair<D>& p) {
+  return -p.m_b * ((p.P_a / (p.Omega_a * p.rho_a * p.rho_a)) * p.grad_W_a +
+                   (p.P_b / (p.Omega_b * p.rho_b * p.rho_b)) * p.grad_W_b);
+}
+
+/// Price 2012 eq. 35 (grad-h SPH), inviscid part: du_a/dt += m_b P_a / (Omega_a rho_a^2) v_ab . nabla_a W_ab(h_a).
+template <int D>
+inline double pressure_heating_grad_h(const Pair<D>& p) {
+  return p.m_b * (p.P_a / (p.Omega_a * p.rho_a * p.rho_a)) * p.v_ab.dot(p.grad_W_a);
+}
+
 }  // namespace rsph::physics

@@ -1,0 +1,16 @@
+# Runs CMD (a list) in a fresh OUT folder; passes when it exits non-zero, prints EXPECT on stderr,
+# and leaves no summary.json behind.
+file(REMOVE_RECURSE ${OUT})
+file(MAKE_DIRECTORY ${OUT})
+execute_process(COMMAND ${CMD} --out ${OUT}/run RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(rc EQUAL 0)
+  message(FATAL_ERROR "expected a non-zero exit, got 0\n${out}\n${err}")
+endif()
+string(FIND "${err}" "${EXPECT}" pos)
+if(pos EQUAL -1)
+  message(FATAL_ERROR "stderr does not name the cause '${EXPECT}':\n${err}")
+endif()
+if(EXISTS ${OUT}/run/summary.json)
+  message(FATAL_ERROR "a failed run left summary.json behind")
+endif()
+message(STATUS "exit ${rc}: ${err}")

@@ -1,0 +1,16 @@
+# Runs CMD into OUT; passes when it exits 0 and leaves summary.json, a snapshot and CSV curves,
+# and no partially written file.
+file(REMOVE_RECURSE ${OUT})
+execute_process(COMMAND ${CMD} --out ${OUT} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "run failed (${rc}):\n${out}\n${err}")
+endif()
+foreach(f summary.json snap_00000.h5 conservation.csv)
+  if(NOT EXISTS ${OUT}/${f})
+    message(FATAL_ERROR "missing output ${f}")
+  endif()
+endforeach()
+file(GLOB partial ${OUT}/.*.partial)
+if(partial)
+  message(FATAL_ERROR "partial files left: ${partial}")
+endif()
