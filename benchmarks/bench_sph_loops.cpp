@@ -1,0 +1,85 @@
+// Density (eq. 2) and force (eqs. 3-4) loops on a jittered 2D lattice, fixed h as on an RSPH lattice.
+// Reported as particle updates per second (items_per_second), serial and with all threads.
+#include "rsph/rsph.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+using namespace rsph;
+
+namespace {
+
+using Sim = Simulation<2, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity>;
+
+std::unique_ptr<Sim> make_lattice(std::int64_t n_particles, double h_over_dx) {
+  const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(n_particles))));
+  const double dx = 1.0 / n;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-0.05, 0.05);
+  ParticleSet<2, true> p;
+  p.reserve(static_cast<std::size_t>(n) * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      p.add(dx * dx, Vec<2>((i + 0.5 + u(rng)) * dx, (j + 0.5 + u(rng)) * dx), Vec<2>(u(rng), u(rng)), h_over_dx * dx, 1.0);
+  Box<2> box;
+  box.edge = {Edge::periodic, Edge::periodic};
+  return std::make_unique<Sim>(std::move(p), box, eos::IdealGas{1.4}, regularize::None{}, TimeStepParams{},
+                               physics::ArtificialViscosity{1.0, 2.0});
+}
+
+int threads_for(const benchmark::State& state) {
+  int t = static_cast<int>(state.range(2));
+#ifdef _OPENMP
+  if (t == 0) t = omp_get_num_procs();
+  omp_set_num_threads(t);
+#endif
+  return t;
+}
+
+template <bool Forces>
+void BM_loop(benchmark::State& state) {
+  const double h_over_dx = static_cast<double>(state.range(1)) / 10.0;
+  const int threads = threads_for(state);
+  auto sim = make_lattice(state.range(0), h_over_dx);
+  for (auto _ : state) {
+    if constexpr (Forces) sim->compute_forces();
+    else sim->compute_density();
+    benchmark::DoNotOptimize(sim->particles().rho.data());
+  }
+  const auto n = static_cast<std::int64_t>(sim->particles().n_real);
+  state.SetItemsProcessed(state.iterations() * n);
+  state.counters["threads"] = threads;
+  state.counters["neighbours"] = static_cast<double>(sim->neighbor_list().pairs()) / static_cast<double>(n);
+}
+
+void BM_density(benchmark::State& s) { BM_loop<false>(s); }
+void BM_forces(benchmark::State& s) { BM_loop<true>(s); }
+
+void BM_all_rates(benchmark::State& state) {
+  const int threads = threads_for(state);
+  auto sim = make_lattice(state.range(0), static_cast<double>(state.range(1)) / 10.0);
+  for (auto _ : state) sim->compute_rates();  // ghosts, cell list, neighbour lists, density and forces
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(sim->particles().n_real));
+  state.counters["threads"] = threads;
+}
+
+// {particles, 10 h/dx, threads (0: all)}
+void sizes(benchmark::internal::Benchmark* b) {
+  for (std::int64_t n : {10000, 100000, 1000000})
+    for (std::int64_t h : {12, 14})
+      for (std::int64_t t : {1, 0}) b->Args({n, h, t});
+  b->Unit(benchmark::kMillisecond)->UseRealTime();
+}
+
+}  // namespace
+
+BENCHMARK(BM_density)->Apply(sizes);
+BENCHMARK(BM_forces)->Apply(sizes);
+BENCHMARK(BM_all_rates)->Apply(sizes);
+BENCHMARK_MAIN();

@@ -1,0 +1,52 @@
+#!/usr/bin/python3
+"""Draws rho, v and P of every particle over the exact solution for one or more rsph-sod output folders.
+
+Usage: plot_sod.py OUT_DIR [OUT_DIR ...] --png FILE
+"""
+import argparse
+import csv
+import json
+import os
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+
+def read_csv(path):
+    with open(path) as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("dirs", nargs="+")
+    ap.add_argument("--png", required=True)
+    args = ap.parse_args()
+    fig, axes = plt.subplots(len(args.dirs), 3, figsize=(13, 3.6 * len(args.dirs)), squeeze=False)
+    for row, d in zip(axes, args.dirs):
+        parts = read_csv(os.path.join(d, "particles.csv"))
+        exact = read_csv(os.path.join(d, "exact.csv"))
+        with open(os.path.join(d, "summary.json")) as f:
+            s = json.load(f)
+        for ax, key, label, err in zip(row, ["rho", "v", "P"], [r"$\rho$", "$v_x$", "$P$"], ["L1_rho", "L1_v", "L1_P"]):
+            ax.plot(parts["x"], parts[key], ".", ms=2, color="tab:blue", label="SPH particles")
+            ax.plot(exact["x"], exact[key], "-", lw=1, color="k", label="exact")
+            ax.set_xlabel("x")
+            ax.set_ylabel(label)
+            ax.set_title(f"{s['dim']}D, {s['particles']} particles: L1 = {s[err]:.2e}", fontsize=9)
+        row[0].legend(fontsize=8)
+        row[2].text(0.02, 0.05, f"{s['steps']} steps, {s['wall_seconds']:.2f} s\n"
+                    f"{s['particle_updates_per_second']:.3g} particle updates/s", transform=row[2].transAxes,
+                    fontsize=8)
+    fig.suptitle("Sod shock tube at t = 0.2: grad-h SPH (cubic spline, alpha = 1, beta = 2) vs exact solution")
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=110)
+    print(f"wrote {args.png}")
+
+
+if __name__ == "__main__":
+    main()
