@@ -81,7 +81,13 @@ class Simulation {
   /// One kick-drift-kick leapfrog step of at most dt_limit; regularizes afterwards when due.
   /// Returns the step taken.
   double step(double dt_limit = std::numeric_limits<double>::infinity()) {
-    const double dt = std::min(time_step(), dt_limit);
+    double dt = std::min(time_step(), dt_limit);
+    if constexpr (requires { reg_.time_until_due(info_); }) {
+      const double left = reg_.time_until_due(info_);  // land on a time-based regularization exactly
+      if (left > 0.0) dt = std::min(dt, left);
+    }
+    if (!std::isfinite(dt))
+      throw InputError("no time-step constraint: nothing moves or exerts force; set TimeStepParams::dt_max");
     if (!(dt > params_.dt_min))
       throw NumericalError("time step " + std::to_string(dt) + " fell below the minimum " +
                            std::to_string(params_.dt_min) + " at t = " + std::to_string(time_));
@@ -117,6 +123,7 @@ class Simulation {
     particle_updates_ += n;
     info_.step = step_;
     info_.time = time_;
+    info_.neighbors = &nl_;
     if (reg_.due(p_, box_, info_)) regularize_now();
     if (params_.check_every_step) check_physical();
     return dt;
@@ -376,6 +383,7 @@ class Simulation {
       require(box_.hi[k] > box_.lo[k], "the box is empty along axis " + std::to_string(k) + " (hi <= lo)");
     params_.validate();
     validate_policy(eos_);
+    validate_policy(reg_);
     std::apply([&](const auto&... term) { (validate_policy(term), ...); }, terms_);
     for (std::size_t a = 0; a < p_.n_real; ++a) {
       const std::string who = "particle " + std::to_string(a) + ": ";

@@ -72,6 +72,56 @@ class CellList {
     }
   }
 
+  /// Calls f(j) for every point j in the cells at Chebyshev distance exactly `ring` from p's cell.
+  /// Every point outside rings 0..k lies farther than k * cell_size() from p.
+  template <class F>
+  void for_each_in_ring(const Vec<D>& p, std::int64_t ring, F&& f) const {
+    const auto c = coords(p);
+    std::array<std::int64_t, D> lo, hi;
+    for (int k = 0; k < D; ++k) {
+      lo[k] = c[k] - ring;
+      hi[k] = c[k] + ring;
+    }
+    std::array<std::int64_t, D> idx;
+    for (int k = 0; k < D; ++k) idx[k] = std::max<std::int64_t>(lo[k], 0);
+    for (;;) {
+      bool on_ring = false;
+      for (int k = 0; k < D; ++k) on_ring |= idx[k] == lo[k] || idx[k] == hi[k];
+      if (on_ring) {
+        const std::size_t cell = cell_index(idx);
+        for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s]);
+      }
+      int k = 0;
+      for (; k < D; ++k) {
+        if (++idx[k] <= std::min(hi[k], dims_[k] - 1)) break;
+        idx[k] = std::max<std::int64_t>(lo[k], 0);
+      }
+      if (k == D) break;
+    }
+  }
+
+  /// A lower bound on the distance from p to any point outside rings 0..ring around p's cell.
+  double unseen_distance(const Vec<D>& p, std::int64_t ring) const {
+    const auto c = coords(p);
+    const double size = cell_size();
+    double d = std::numeric_limits<double>::max();
+    for (int k = 0; k < D; ++k) {
+      const double cell_lo = lo_[k] + static_cast<double>(c[k] - ring) * size;
+      const double cell_hi = lo_[k] + static_cast<double>(c[k] + ring + 1) * size;
+      if (c[k] - ring > 0) d = std::min(d, p[k] - cell_lo);
+      if (c[k] + ring < dims_[k] - 1) d = std::min(d, cell_hi - p[k]);
+    }
+    return d;
+  }
+
+  /// Rings beyond this one hold no points.
+  std::int64_t max_ring() const {
+    std::int64_t m = 0;
+    for (int k = 0; k < D; ++k) m = std::max(m, dims_[k]);
+    return m;
+  }
+  double cell_size() const { return 1.0 / inv_size_; }
+
   /// The points in cell order: iterating particles this way keeps neighbours close in memory.
   const std::vector<std::uint32_t>& sorted() const { return sorted_; }
 

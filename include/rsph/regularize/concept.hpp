@@ -2,6 +2,7 @@
 // The regularization policy axis: the one thing that tells RSPH from SPH.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/particle_set.hpp"
+#include "rsph/neighbors/neighbor_list.hpp"
 
 #include <concepts>
 #include <cstdint>
@@ -14,6 +15,7 @@ struct StepInfo {
   double time = 0.0;                  ///< simulated time
   std::uint64_t steps_since_last = 0; ///< steps since the last regularization (or the start)
   double time_since_last = 0.0;
+  const neighbors::NeighborList* neighbors = nullptr;  ///< current neighbour lists of the real particles
 };
 
 /// A regularizer decides when (`due`) and remaps the particles onto a new set (`remap`) conserving

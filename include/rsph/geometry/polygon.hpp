@@ -1,0 +1,159 @@
+#pragma once
+// Convex polygons in double precision with a fixed vertex capacity (no allocation in the hot loops):
+// area, centroid, and Sutherland-Hodgman clipping by half-planes, rectangles and convex polygons.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace rsph::geometry {
+
+using Point = Vec<2>;
+
+/// A convex polygon, vertices counter-clockwise. Clipping a convex n-gon by a half-plane gives at most
+/// n + 1 vertices; Voronoi cells rarely exceed 12 vertices, so the capacity is generous.
+struct ConvexPolygon {
+  static constexpr int capacity = 64;
+  std::array<Point, capacity> v;
+  int n = 0;
+
+  ConvexPolygon() = default;
+  // Copies only the vertices in use: polygons are copied inside the clipping loops.
+  ConvexPolygon(const ConvexPolygon& o) : n(o.n) { std::copy_n(o.v.begin(), o.n, v.begin()); }
+  ConvexPolygon& operator=(const ConvexPolygon& o) {
+    n = o.n;
+    std::copy_n(o.v.begin(), o.n, v.begin());
+    return *this;
+  }
+
+  void clear() { n = 0; }
+  void push(const Point& p) {
+    if (n == capacity) throw NumericalError("convex polygon: more than 64 vertices (degenerate Voronoi cell)");
+    v[static_cast<std::size_t>(n++)] = p;
+  }
+  bool empty() const { return n < 3; }
+  const Point& operator[](int i) const { return v[static_cast<std::size_t>(i)]; }
+
+  static ConvexPolygon rectangle(double x0, double y0, double x1, double y1) {
+    ConvexPolygon r;
+    r.push(Point(x0, y0));
+    r.push(Point(x1, y0));
+    r.push(Point(x1, y1));
+    r.push(Point(x0, y1));
+    return r;
+  }
+  /// Regular k-gon of circumradius R around c (a disc, closed from outside).
+  static ConvexPolygon regular(const Point& c, double R, int k) {
+    ConvexPolygon r;
+    for (int i = 0; i < k; ++i) {
+      const double phi = 2.0 * 3.14159265358979323846 * i / k;
+      r.push(c + R * Point(std::cos(phi), std::sin(phi)));
+    }
+    return r;
+  }
+  void translate(const Point& d) {
+    for (int i = 0; i < n; ++i) v[static_cast<std::size_t>(i)] += d;
+  }
+};
+
+/// Shoelace area (positive for counter-clockwise order).
+inline double area(const ConvexPolygon& p) {
+  if (p.n < 3) return 0.0;
+  double a = 0.0;
+  for (int i = 0, j = p.n - 1; i < p.n; j = i++) a += p[j].x() * p[i].y() - p[i].x() * p[j].y();
+  return 0.5 * a;
+}
+
+inline Point centroid(const ConvexPolygon& p) {
+  double a = 0.0, cx = 0.0, cy = 0.0;
+  for (int i = 0, j = p.n - 1; i < p.n; j = i++) {
+    const double c = p[j].x() * p[i].y() - p[i].x() * p[j].y();
+    a += c;
+    cx += (p[j].x() + p[i].x()) * c;
+    cy += (p[j].y() + p[i].y()) * c;
+  }
+  return a != 0.0 ? Point(cx / (3.0 * a), cy / (3.0 * a)) : p[0];
+}
+
+/// Largest vertex distance from c.
+inline double max_radius(const ConvexPolygon& p, const Point& c) {
+  double r2 = 0.0;
+  for (int i = 0; i < p.n; ++i) r2 = std::max(r2, (p[i] - c).squaredNorm());
+  return std::sqrt(r2);
+}
+
+/// Keeps the part of `in` where normal . x <= offset (Sutherland-Hodgman, one edge).
+inline void clip_halfplane(const ConvexPolygon& in, const Point& normal, double offset, ConvexPolygon& out) {
+  out.clear();
+  if (in.n == 0) return;
+  int j = in.n - 1;
+  double dj = normal.dot(in[j]) - offset;
+  for (int i = 0; i < in.n; ++i) {
+    const double di = normal.dot(in[i]) - offset;
+    if (di <= 0.0) {
+      if (dj > 0.0) out.push(in[j] + (dj / (dj - di)) * (in[i] - in[j]));
+      out.push(in[i]);
+    } else if (dj <= 0.0) {
+      out.push(in[j] + (dj / (dj - di)) * (in[i] - in[j]));
+    }
+    j = i;
+    dj = di;
+  }
+  if (out.n < 3) out.clear();
+}
+
+/// Clips to the half-plane in place.
+inline void clip_halfplane(ConvexPolygon& p, const Point& normal, double offset) {
+  ConvexPolygon tmp;
+  clip_halfplane(p, normal, offset, tmp);
+  p = tmp;
+}
+
+/// Axis-aligned bounding box.
+struct Bounds {
+  Point lo, hi;
+};
+inline Bounds bounds(const ConvexPolygon& p) {
+  Bounds b{p[0], p[0]};
+  for (int i = 1; i < p.n; ++i) {
+    b.lo = b.lo.cwiseMin(p[i]);
+    b.hi = b.hi.cwiseMax(p[i]);
+  }
+  return b;
+}
+
+/// Area of p inside the rectangle [x0, x1] x [y0, y1]; `pb` are p's bounds and `p_area` its area,
+/// so that sides which cannot cut are skipped.
+inline double clipped_area_rect(const ConvexPolygon& p, const Bounds& pb, double p_area, double x0, double y0, double x1,
+                                double y1) {
+  if (pb.lo.x() >= x1 || pb.hi.x() <= x0 || pb.lo.y() >= y1 || pb.hi.y() <= y0) return 0.0;
+  const bool cut_x0 = pb.lo.x() < x0, cut_x1 = pb.hi.x() > x1, cut_y0 = pb.lo.y() < y0, cut_y1 = pb.hi.y() > y1;
+  if (!(cut_x0 || cut_x1 || cut_y0 || cut_y1)) return p_area;
+  ConvexPolygon a = p, b;
+  if (cut_x0) { clip_halfplane(a, Point(-1, 0), -x0, b); a = b; }
+  if (cut_x1) { clip_halfplane(a, Point(1, 0), x1, b); a = b; }
+  if (cut_y0) { clip_halfplane(a, Point(0, -1), -y0, b); a = b; }
+  if (cut_y1) { clip_halfplane(a, Point(0, 1), y1, b); a = b; }
+  return area(a);
+}
+
+/// Area of p inside the rectangle [x0, x1] x [y0, y1].
+inline double clipped_area_rect(const ConvexPolygon& p, double x0, double y0, double x1, double y1) {
+  return clipped_area_rect(p, bounds(p), area(p), x0, y0, x1, y1);
+}
+
+/// p intersected with a convex polygon `window` (counter-clockwise).
+inline ConvexPolygon clip_convex(const ConvexPolygon& p, const ConvexPolygon& window) {
+  ConvexPolygon cur = p, next;
+  for (int i = 0, j = window.n - 1; i < window.n && cur.n >= 3; j = i++) {
+    const Point e = window[i] - window[j];
+    const Point normal(e.y(), -e.x());  // outward for a counter-clockwise window
+    clip_halfplane(cur, normal, normal.dot(window[j]), next);
+    cur = next;
+  }
+  return cur;
+}
+
+}  // namespace rsph::geometry

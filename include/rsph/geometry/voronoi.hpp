@@ -1,0 +1,374 @@
+#pragma once
+// Voronoi cells of 2D particles, closed against the domain, handed one by one to a visitor (cells are
+// consumed at once by the remap; storing a million polygons would cost gigabytes).
+//
+// Domain edges: periodic axes get periodic images of the particles near the faces; reflecting axes clip
+// the cell to the box (the bisector of a particle and its mirror image is the wall itself); open axes
+// close each cell with a disc of radius `closing_radius[a]` (a regular 32-gon circumscribing it), so no
+// cell is ever unbounded.
+//
+// Two interchangeable builders:
+//  - LocalVoronoi cuts each cell out of its initial polygon by the bisectors of neighbours found ring by
+//    ring in a cell list, until the security radius (twice the farthest vertex distance) is passed.
+//    Exact in double precision; per particle, so it runs in parallel.
+//  - BoostVoronoi takes the Voronoi neighbours from Boost.Polygon's construct_voronoi on positions
+//    quantized to 31-bit integers (scale 2^30 over the extent of the points: quantization error at most
+//    extent / 2^31 per coordinate), then cuts the cell by those neighbours' bisectors in double precision
+//    from the unquantized positions. Quantization can only miss edges shorter than about that error, so
+//    the two agree to round-off on any set whose points are farther apart than the quantum.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+#include "rsph/geometry/polygon.hpp"
+#include "rsph/neighbors/cell_list.hpp"
+
+#include <boost/polygon/voronoi.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <unordered_map>
+#include <vector>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace rsph::geometry {
+
+/// The points a cell builder sees: the real particles, then periodic images (with their sources).
+struct SitesWithImages {
+  std::vector<Point> x;
+  std::vector<std::uint32_t> source;
+  std::size_t n_real = 0;
+  double margin = 0.0;  ///< images cover this distance beyond each periodic face
+};
+
+namespace detail {
+
+inline void check_sites(const std::vector<Point>& x, const Box<2>& box) {
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    if (!x[a].allFinite()) throw InputError("Voronoi cells: particle " + std::to_string(a) + " has a non-finite position");
+    for (int k = 0; k < 2; ++k)
+      if (box.edge[k] != Edge::open && (x[a][k] < box.lo[k] || x[a][k] > box.hi[k]))
+        throw InputError("Voronoi cells: particle " + std::to_string(a) + " lies outside the domain along axis " +
+                         std::to_string(k));
+  }
+}
+
+inline SitesWithImages add_periodic_images(const std::vector<Point>& x, const Box<2>& box, double margin) {
+  SitesWithImages s;
+  s.x = x;
+  s.n_real = x.size();
+  s.margin = margin;
+  s.source.resize(x.size());
+  for (std::size_t a = 0; a < x.size(); ++a) s.source[a] = static_cast<std::uint32_t>(a);
+  for (int k = 0; k < 2; ++k) {
+    if (!box.periodic(k)) continue;
+    const double L = box.hi[k] - box.lo[k];
+    require(margin < L, "Voronoi cells: the periodic image margin exceeds the box");
+    const std::size_t n = s.x.size();
+    for (std::size_t i = 0; i < n; ++i) {
+      Point p = s.x[i];
+      if (p[k] < box.lo[k] + margin) {
+        p[k] += L;
+        s.x.push_back(p);
+        s.source.push_back(s.source[i]);
+      }
+      p = s.x[i];
+      if (p[k] > box.hi[k] - margin) {
+        p[k] -= L;
+        s.x.push_back(p);
+        s.source.push_back(s.source[i]);
+      }
+    }
+  }
+  return s;
+}
+
+/// The polygon a cell is cut from, in coordinates relative to the particle: the box (walls), the box
+/// widened by the image margin (periodic), and the closing disc (open axes).
+inline ConvexPolygon initial_cell(const Point& xa, const Box<2>& box, double margin, double closing_radius) {
+  double lo[2], hi[2];
+  bool open = false;
+  for (int k = 0; k < 2; ++k) {
+    if (box.edge[k] == Edge::open) {
+      lo[k] = -closing_radius;
+      hi[k] = closing_radius;
+      open = true;
+    } else {
+      const double widen = box.periodic(k) ? margin : 0.0;
+      lo[k] = box.lo[k] - widen - xa[k];
+      hi[k] = box.hi[k] + widen - xa[k];
+    }
+  }
+  ConvexPolygon cell = ConvexPolygon::rectangle(lo[0], lo[1], hi[0], hi[1]);
+  if (open) {
+    // circumscribed 32-gon: its inradius is the closing radius
+    const int k = 32;
+    const double R = closing_radius / std::cos(3.14159265358979323846 / k);
+    cell = clip_convex(cell, ConvexPolygon::regular(Point::Zero(), R, k));
+  }
+  return cell;
+}
+
+/// Cuts `cell` (relative to x_a) by the bisector with a site at relative position d: keeps |y| <= |y - d|.
+inline void cut_by_bisector(ConvexPolygon& cell, const Point& d, ConvexPolygon& scratch) {
+  const double offset = 0.5 * d.squaredNorm();
+  bool cuts = false;  // most candidates miss the cell: test before copying
+  for (int i = 0; i < cell.n && !cuts; ++i) cuts = d.dot(cell[i]) > offset;
+  if (!cuts) return;
+  clip_halfplane(cell, d, offset, scratch);
+  cell = scratch;
+}
+
+/// Mean spacing of n points in the box (open axes: their bounding box).
+inline double mean_spacing(const std::vector<Point>& x, const Box<2>& box) {
+  Point lo = box.lo, hi = box.hi;
+  for (int k = 0; k < 2; ++k)
+    if (box.edge[k] == Edge::open) {
+      lo[k] = std::numeric_limits<double>::max();
+      hi[k] = std::numeric_limits<double>::lowest();
+      for (const auto& p : x) {
+        lo[k] = std::min(lo[k], p[k]);
+        hi[k] = std::max(hi[k], p[k]);
+      }
+    }
+  const double extent = std::max((hi - lo).prod(), 1e-300);
+  return std::sqrt(extent / static_cast<double>(std::max<std::size_t>(x.size(), 1)));
+}
+
+/// Whether a cell reaches the edge of the region covered by images (then the margin was too small).
+inline bool touches_margin(const ConvexPolygon& cell, const Point& xa, const Box<2>& box, double margin) {
+  for (int k = 0; k < 2; ++k) {
+    if (!box.periodic(k)) continue;
+    const double tol = 1e-9 * (box.hi[k] - box.lo[k]);
+    for (int i = 0; i < cell.n; ++i) {
+      const double y = cell[i][k] + xa[k];
+      if (y <= box.lo[k] - margin + tol || y >= box.hi[k] + margin - tol) return true;
+    }
+  }
+  return false;
+}
+
+inline double max_radius2_origin(const ConvexPolygon& p) {
+  double r2 = 0.0;
+  for (int i = 0; i < p.n; ++i) r2 = std::max(r2, p[i].squaredNorm());
+  return r2;
+}
+
+inline void check_coincident(const ConvexPolygon& cell, std::size_t a) {
+  if (cell.empty())
+    throw InputError("Voronoi cells: particle " + std::to_string(a) + " coincides with another particle");
+}
+
+template <class Visitor>
+void run_parallel(std::size_t n, Visitor&& body) {
+  int n_threads = 1;
+#ifdef _OPENMP
+  n_threads = omp_get_max_threads();
+#endif
+#pragma omp parallel num_threads(n_threads)
+  {
+    int t = 0;
+#ifdef _OPENMP
+    t = omp_get_thread_num();
+#endif
+    const std::size_t begin = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(n_threads);
+    const std::size_t end = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(n_threads);
+    body(t, begin, end);
+  }
+}
+
+}  // namespace detail
+
+/// Number of threads the builders use (visitors keep per-thread state).
+inline int builder_threads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+/// Local half-plane builder. visit(thread, a, cell) receives each real particle's cell in coordinates
+/// relative to x[a]; particles of one thread arrive in increasing order. When periodic images turn out
+/// too few (a cell reaches past them), the builder widens them and starts again, calling
+/// visit.restart() first: a visitor must then forget what it was given.
+class LocalVoronoi {
+ public:
+  template <class Visitor>
+  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, Visitor&& visit) {
+    detail::check_sites(x, box);
+    double margin = 4.0 * detail::mean_spacing(x, box);
+    for (int attempt = 0;; ++attempt) {
+      if (attempt > 0) visit.restart();
+      if (try_build(x, box, closing_radius, margin, visit)) return;
+      margin *= 2.0;
+      bool fits = true;
+      for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < box.hi[k] - box.lo[k];
+      if (!fits || attempt > 8)
+        throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
+    }
+  }
+
+ private:
+  template <class Visitor>
+  bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, double margin,
+                 Visitor& visit) {
+    const SitesWithImages sites = detail::add_periodic_images(x, box, margin);
+    neighbors::CellList<2> cells;
+    cells.build(sites.x, detail::mean_spacing(x, box) * 1.5);
+    const std::int64_t max_ring = cells.max_ring();
+    std::atomic<bool> ok{true};
+    detail::run_parallel(sites.n_real, [&](int thread, std::size_t begin, std::size_t end) {
+      ConvexPolygon cell, scratch;
+      std::vector<std::pair<double, std::uint32_t>> ring_points;
+      for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
+        const Point xa = sites.x[a];
+        cell = detail::initial_cell(xa, box, margin, closing_radius.empty() ? 0.0 : closing_radius[a]);
+        for (std::int64_t ring = 0; ring <= max_ring; ++ring) {
+          // stop once every unseen point lies beyond the security radius
+          if (ring >= 1 && cells.unseen_distance(xa, ring - 1) > 2.0 * std::sqrt(detail::max_radius2_origin(cell))) break;
+          ring_points.clear();
+          cells.for_each_in_ring(xa, ring, [&](std::uint32_t b) {
+            if (b != a) ring_points.emplace_back((sites.x[b] - xa).squaredNorm(), b);
+          });
+          std::sort(ring_points.begin(), ring_points.end());
+          for (const auto& [d2, b] : ring_points) {
+            if (d2 > 4.0 * detail::max_radius2_origin(cell)) break;  // nearest first: the rest cannot cut
+            if (d2 == 0.0) {
+              cell.clear();
+              break;
+            }
+            detail::cut_by_bisector(cell, sites.x[b] - xa, scratch);
+          }
+          if (cell.empty()) break;
+        }
+        detail::check_coincident(cell, a);
+        if (detail::touches_margin(cell, xa, box, margin)) {
+          ok.store(false, std::memory_order_relaxed);
+          break;
+        }
+        visit(thread, a, cell);
+      }
+    });
+    return ok;
+  }
+};
+
+/// Boost.Polygon builder: Voronoi neighbours from construct_voronoi on quantized positions, cells cut
+/// in double precision. Same visitor protocol as LocalVoronoi.
+class BoostVoronoi {
+ public:
+  static constexpr double quantization_levels = 1073741824.0;  ///< 2^30 steps over the extent of the points
+
+  template <class Visitor>
+  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, Visitor&& visit) {
+    detail::check_sites(x, box);
+    double margin = 4.0 * detail::mean_spacing(x, box);
+    for (int attempt = 0;; ++attempt) {
+      if (attempt > 0) visit.restart();
+      if (try_build(x, box, closing_radius, margin, visit)) return;
+      margin *= 2.0;
+      bool fits = true;
+      for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < box.hi[k] - box.lo[k];
+      if (!fits || attempt > 8)
+        throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
+    }
+  }
+
+ private:
+  template <class Visitor>
+  bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, double margin,
+                 Visitor& visit) {
+    const SitesWithImages sites = detail::add_periodic_images(x, box, margin);
+    const std::size_t n_sites = sites.x.size();
+    // Quantize; points that share integer coordinates form one group (Boost keeps one of them).
+    Point lo = sites.x[0], hi = sites.x[0];
+    for (const auto& p : sites.x) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    const double extent = std::max((hi - lo).maxCoeff(), 1e-300);
+    const double scale = quantization_levels / extent;
+    std::vector<boost::polygon::point_data<int>> unique;
+    std::vector<std::uint32_t> group_of(n_sites);
+    std::vector<std::vector<std::uint32_t>> members;
+    std::unordered_map<std::uint64_t, std::uint32_t> index_of;
+    index_of.reserve(n_sites);
+    for (std::size_t i = 0; i < n_sites; ++i) {
+      const auto qx = static_cast<int>(std::llround((sites.x[i].x() - lo.x()) * scale));
+      const auto qy = static_cast<int>(std::llround((sites.x[i].y() - lo.y()) * scale));
+      const std::uint64_t key = (static_cast<std::uint64_t>(qx) << 32) | static_cast<std::uint32_t>(qy);
+      auto [it, fresh] = index_of.emplace(key, static_cast<std::uint32_t>(unique.size()));
+      if (fresh) {
+        unique.emplace_back(qx, qy);
+        members.emplace_back();
+      }
+      group_of[i] = it->second;
+      members[it->second].push_back(static_cast<std::uint32_t>(i));
+    }
+    boost::polygon::voronoi_diagram<double> vd;
+    boost::polygon::construct_voronoi(unique.begin(), unique.end(), &vd);
+    std::vector<std::vector<std::uint32_t>> adjacent(unique.size());
+    for (const auto& c : vd.cells()) {
+      const auto* e = c.incident_edge();
+      if (!e) continue;
+      auto& adj = adjacent[c.source_index()];
+      do {
+        adj.push_back(static_cast<std::uint32_t>(e->twin()->cell()->source_index()));
+        e = e->next();
+      } while (e != c.incident_edge());
+    }
+    std::atomic<bool> ok{true};
+    detail::run_parallel(sites.n_real, [&](int thread, std::size_t begin, std::size_t end) {
+      ConvexPolygon cell, scratch;
+      for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
+        const Point xa = sites.x[a];
+        cell = detail::initial_cell(xa, box, margin, closing_radius.empty() ? 0.0 : closing_radius[a]);
+        const std::uint32_t g = group_of[a];
+        auto cut_group = [&](std::uint32_t group) {
+          for (std::uint32_t b : members[group]) {
+            if (b == a) continue;
+            const Point d = sites.x[b] - xa;
+            if (d.squaredNorm() == 0.0) {
+              cell.clear();
+              return;
+            }
+            detail::cut_by_bisector(cell, d, scratch);
+          }
+        };
+        cut_group(g);
+        for (std::uint32_t nb : adjacent[g]) {
+          if (cell.empty()) break;
+          cut_group(nb);
+        }
+        detail::check_coincident(cell, a);
+        if (detail::touches_margin(cell, xa, box, margin)) {
+          ok.store(false, std::memory_order_relaxed);
+          break;
+        }
+        visit(thread, a, cell);
+      }
+    });
+    return ok.load();
+  }
+};
+
+/// Cell area of every particle, for tests and diagnostics: stores areas, not polygons.
+template <class Builder>
+std::vector<double> cell_areas(Builder& builder, const std::vector<Point>& x, const Box<2>& box,
+                               const std::vector<double>& closing_radius = {}) {
+  struct Collect {
+    std::vector<double>* out;
+    void restart() { std::fill(out->begin(), out->end(), 0.0); }
+    void operator()(int, std::size_t a, const ConvexPolygon& cell) { (*out)[a] = area(cell); }
+  };
+  std::vector<double> areas(x.size(), 0.0);
+  builder.build(x, box, closing_radius, Collect{&areas});
+  return areas;
+}
+
+}  // namespace rsph::geometry

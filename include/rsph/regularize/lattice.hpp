@@ -1,0 +1,154 @@
+#pragma once
+// Lattices new particles are created on: their sites and cells (the cells tile the plane or the line).
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+#include "rsph/geometry/polygon.hpp"
+
+#include <cmath>
+#include <concepts>
+#include <cstdint>
+#include <string>
+
+namespace rsph {
+
+/// Integer index range [lo, hi] per axis.
+template <int D>
+struct IndexRange {
+  std::array<std::int64_t, D> lo{}, hi{};
+};
+
+/// A regularization lattice with spacing Delta: sites indexed by integers, each owning a cell.
+/// `cell` returns the cell in coordinates relative to `origin`.
+template <class L, int D>
+concept RegularLattice = requires(const L& l, const Box<D>& box, const Vec<D>& lo, const Vec<D>& hi,
+                                  std::array<std::int64_t, D> idx) {
+  { L::dim } -> std::convertible_to<int>;
+  { l.spacing } -> std::convertible_to<double>;
+  { l.cell_volume() } -> std::same_as<double>;
+  { l.cells_touching(box, lo, hi) } -> std::same_as<IndexRange<D>>;  ///< every cell meeting [lo, hi]
+  { l.site(box, idx) } -> std::same_as<Vec<D>>;
+  { l.periods(box) } -> std::same_as<std::array<std::int64_t, D>>;  ///< cells per periodic axis (0: not periodic)
+};
+
+namespace lattice {
+
+namespace detail {
+inline std::int64_t cells_along(const Box<2>& box, int k, double pitch, const char* name) {
+  const double L = box.hi[k] - box.lo[k];
+  const double n = L / pitch;
+  const auto rounded = static_cast<std::int64_t>(std::llround(n));
+  require(rounded >= 1 && std::abs(n - static_cast<double>(rounded)) < 1e-9 * std::max(1.0, n),
+          std::string(name) + " lattice: the box length along axis " + std::to_string(k) + " (" + std::to_string(L) +
+              ") must be a whole number of lattice rows (pitch " + std::to_string(pitch) + ")");
+  return rounded;
+}
+}  // namespace detail
+
+/// Uniform 1D lattice: sites at lo + (i + 1/2) Delta, cells [lo + i Delta, lo + (i + 1) Delta].
+struct Uniform1D {
+  static constexpr int dim = 1;
+  double spacing;
+
+  double cell_volume() const { return spacing; }
+  IndexRange<1> cells_touching(const Box<1>& box, const Vec<1>& lo, const Vec<1>& hi) const {
+    return {{static_cast<std::int64_t>(std::floor((lo[0] - box.lo[0]) / spacing))},
+            {static_cast<std::int64_t>(std::floor((hi[0] - box.lo[0]) / spacing))}};
+  }
+  Vec<1> site(const Box<1>& box, std::array<std::int64_t, 1> i) const { return Vec<1>(box.lo[0] + (i[0] + 0.5) * spacing); }
+  std::array<std::int64_t, 1> periods(const Box<1>& box) const {
+    if (box.edge[0] == Edge::open) return {0};
+    const double n = (box.hi[0] - box.lo[0]) / spacing;
+    const auto rounded = static_cast<std::int64_t>(std::llround(n));
+    require(rounded >= 1 && std::abs(n - static_cast<double>(rounded)) < 1e-9 * std::max(1.0, n),
+            "uniform lattice: the box length must be a whole number of spacings (" + std::to_string(n) + ")");
+    return {box.edge[0] == Edge::periodic ? rounded : 0};
+  }
+  /// Cell bounds [a, b] of site i, absolute.
+  std::pair<double, double> cell(const Box<1>& box, std::int64_t i) const {
+    return {box.lo[0] + i * spacing, box.lo[0] + (i + 1) * spacing};
+  }
+};
+
+/// Square lattice of spacing Delta: sites at lo + ((i + 1/2) Delta, (j + 1/2) Delta), square cells.
+struct Square {
+  static constexpr int dim = 2;
+  double spacing;
+
+  double cell_volume() const { return spacing * spacing; }
+  IndexRange<2> cells_touching(const Box<2>& box, const Vec<2>& lo, const Vec<2>& hi) const {
+    IndexRange<2> r;
+    for (int k = 0; k < 2; ++k) {
+      r.lo[k] = static_cast<std::int64_t>(std::floor((lo[k] - box.lo[k]) / spacing));
+      r.hi[k] = static_cast<std::int64_t>(std::floor((hi[k] - box.lo[k]) / spacing));
+    }
+    return r;
+  }
+  Vec<2> site(const Box<2>& box, std::array<std::int64_t, 2> idx) const {
+    return Vec<2>(box.lo[0] + (idx[0] + 0.5) * spacing, box.lo[1] + (idx[1] + 0.5) * spacing);
+  }
+  std::array<std::int64_t, 2> periods(const Box<2>& box) const {
+    std::array<std::int64_t, 2> p{0, 0};
+    for (int k = 0; k < 2; ++k)
+      if (box.edge[k] != Edge::open) {
+        const auto n = detail::cells_along(box, k, spacing, "square");
+        if (box.periodic(k)) p[static_cast<std::size_t>(k)] = n;
+      }
+    return p;
+  }
+  /// The cell of idx relative to `origin`.
+  geometry::ConvexPolygon cell(const Box<2>& box, std::array<std::int64_t, 2> idx, const Vec<2>& origin) const {
+    const double x0 = box.lo[0] + idx[0] * spacing - origin[0], y0 = box.lo[1] + idx[1] * spacing - origin[1];
+    return geometry::ConvexPolygon::rectangle(x0, y0, x0 + spacing, y0 + spacing);
+  }
+  static constexpr bool rectangular_cells = true;
+};
+
+/// Hexagonal lattice of nearest-neighbour distance Delta: rows Delta sqrt(3)/2 apart, odd rows shifted by
+/// Delta/2; cells are regular hexagons of area Delta^2 sqrt(3)/2. Periodic y needs an even row count.
+struct Hexagonal {
+  static constexpr int dim = 2;
+  double spacing;
+
+  double row_pitch() const { return spacing * 0.86602540378443864676; }
+  double cell_volume() const { return spacing * row_pitch(); }
+  IndexRange<2> cells_touching(const Box<2>& box, const Vec<2>& lo, const Vec<2>& hi) const {
+    IndexRange<2> r;
+    // a hexagon reaches 2/3 of a row pitch beyond its row band and Delta/2 beyond its site in x
+    r.lo[1] = static_cast<std::int64_t>(std::floor((lo[1] - box.lo[1]) / row_pitch())) - 1;
+    r.hi[1] = static_cast<std::int64_t>(std::floor((hi[1] - box.lo[1]) / row_pitch())) + 1;
+    r.lo[0] = static_cast<std::int64_t>(std::floor((lo[0] - box.lo[0]) / spacing)) - 1;
+    r.hi[0] = static_cast<std::int64_t>(std::floor((hi[0] - box.lo[0]) / spacing)) + 1;
+    return r;
+  }
+  Vec<2> site(const Box<2>& box, std::array<std::int64_t, 2> idx) const {
+    const double shift = (idx[1] & 1) ? 0.5 : 0.0;
+    return Vec<2>(box.lo[0] + (idx[0] + 0.25 + shift) * spacing, box.lo[1] + (idx[1] + 0.5) * row_pitch());
+  }
+  std::array<std::int64_t, 2> periods(const Box<2>& box) const {
+    std::array<std::int64_t, 2> p{0, 0};
+    if (box.edge[0] != Edge::open) {
+      const auto n = detail::cells_along(box, 0, spacing, "hexagonal");
+      if (box.periodic(0)) p[0] = n;
+    }
+    if (box.edge[1] != Edge::open) {
+      const auto n = detail::cells_along(box, 1, row_pitch(), "hexagonal");
+      require(!box.periodic(1) || n % 2 == 0, "hexagonal lattice: a periodic y axis needs an even number of rows");
+      if (box.periodic(1)) p[1] = n;
+    }
+    return p;
+  }
+  geometry::ConvexPolygon cell(const Box<2>& box, std::array<std::int64_t, 2> idx, const Vec<2>& origin) const {
+    const Vec<2> c = site(box, idx) - origin;
+    const double R = spacing / 1.7320508075688772935;  // circumradius of a hexagon of inradius Delta/2
+    geometry::ConvexPolygon h;
+    for (int k = 0; k < 6; ++k) {
+      const double phi = 3.14159265358979323846 / 6.0 + k * 3.14159265358979323846 / 3.0;
+      h.push(c + R * Vec<2>(std::cos(phi), std::sin(phi)));
+    }
+    return h;
+  }
+  static constexpr bool rectangular_cells = false;
+};
+
+}  // namespace lattice
+}  // namespace rsph

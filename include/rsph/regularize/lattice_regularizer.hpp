@@ -1,0 +1,75 @@
+#pragma once
+// The RSPH regularizer: a lattice, a schedule and a Voronoi cell builder; remaps with eqs. (6)-(9).
+#include "rsph/core/particle_set.hpp"
+#include "rsph/geometry/voronoi.hpp"
+#include "rsph/regularize/concept.hpp"
+#include "rsph/regularize/lattice.hpp"
+#include "rsph/regularize/remap.hpp"
+#include "rsph/regularize/schedule.hpp"
+
+#include <chrono>
+#include <utility>
+#include <vector>
+
+namespace rsph::regularize {
+
+/// One line of the regularization log.
+struct Record {
+  std::uint64_t step = 0;
+  double time = 0.0;
+  RemapStats stats;
+  double seconds = 0.0;
+};
+
+template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi>
+class LatticeRegularizer {
+ public:
+  explicit LatticeRegularizer(Lattice lattice, Schedule schedule, RemapParams params = {}, Builder builder = {})
+      : lattice_(std::move(lattice)), schedule_(std::move(schedule)), params_(params), builder_(std::move(builder)) {}
+
+  void validate() const {
+    params_.validate();
+    require(lattice_.spacing > 0.0, "regularization: the lattice spacing Delta must be positive");
+    if constexpr (requires { schedule_.validate(); }) schedule_.validate();
+  }
+
+  template <class P, class B>
+  bool due(const P& p, const B& box, const StepInfo& s) {
+    last_ = s;
+    return schedule_.due(p, box, s);
+  }
+
+  /// Time left before a time-based schedule fires (absent for step-based ones).
+  double time_until_due(const StepInfo& s) const
+    requires requires(const Schedule& sc) { sc.time_until_due(s); }
+  {
+    return schedule_.time_until_due(s);
+  }
+
+  template <int D, bool E>
+  double remap(ParticleSet<D, E>& p, const Box<D>& box) {
+    const auto t0 = std::chrono::steady_clock::now();
+    Record r;
+    r.step = last_.step;
+    r.time = last_.time;
+    r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_);
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    log_.push_back(r);
+    return r.stats.kinetic_converted;
+  }
+
+  const std::vector<Record>& log() const { return log_; }
+  const Lattice& lattice() const { return lattice_; }
+  Schedule& schedule() { return schedule_; }
+  const RemapParams& params() const { return params_; }
+
+ private:
+  Lattice lattice_;
+  Schedule schedule_;
+  RemapParams params_;
+  Builder builder_;
+  StepInfo last_;
+  std::vector<Record> log_;
+};
+
+}  // namespace rsph::regularize

@@ -1,0 +1,99 @@
+#pragma once
+// When to regularize: every c_r steps, every T_reg of simulated time, or adaptively (Appendix A).
+#include "rsph/core/errors.hpp"
+#include "rsph/core/particle_set.hpp"
+#include "rsph/kernel/kernel.hpp"
+#include "rsph/neighbors/neighbor_list.hpp"
+#include "rsph/regularize/concept.hpp"
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <vector>
+
+namespace rsph::schedule {
+
+/// Every c_r steps (the paper's §3.3 and §4).
+struct EveryNSteps {
+  std::uint64_t steps = 40;
+  void validate() const { require(steps >= 1, "regularization schedule: the step count must be at least 1"); }
+  template <class P, class B>
+  bool due(const P&, const B&, const StepInfo& s) { return s.steps_since_last >= steps; }
+};
+
+/// Every T_reg of simulated time (§2.1, §3.1); the simulation shortens the step that would pass it.
+struct EveryT {
+  double period = 1.0;
+  void validate() const { require(period > 0.0, "regularization schedule: the period T_reg must be positive"); }
+  template <class P, class B>
+  bool due(const P&, const B&, const StepInfo& s) { return s.time_since_last >= period * (1.0 - 1e-12); }
+  double time_until_due(const StepInfo& s) const { return period - s.time_since_last; }
+};
+
+/// Appendix A: regularize when the estimated neighbour number N_a (eqs. A1-A2) leaves [N_min, N_max]
+/// or its local spread delta N_a (eqs. A3-A4) exceeds delta N_max, or after max_steps steps.
+template <class Kernel, int D>
+struct Adaptive {
+  double N_min = 9.5;
+  double N_max = 308.0;
+  double dN_max = 0.4;
+  std::uint64_t max_steps = 128;
+
+  /// Why the last check fired (for logs): 0 none, 1 N below N_min, 2 above N_max, 3 spread, 4 step cap.
+  int last_reason = 0;
+
+  void validate() const {
+    require(N_min > 0.0 && N_max > N_min, "adaptive regularization: need 0 < N_min < N_max");
+    require(dN_max > 0.0, "adaptive regularization: delta N_max must be positive");
+    require(max_steps >= 1, "adaptive regularization: the maximum step count must be at least 1");
+  }
+
+  /// V(h): the interaction volume of eq. (A2), the kernel's support disc (rod, ball).
+  static double interaction_volume(double h) {
+    const double R = Kernel::support * h;
+    if constexpr (D == 1) return 2.0 * R;
+    else if constexpr (D == 2) return std::numbers::pi * R * R;
+    else return 4.0 / 3.0 * std::numbers::pi * R * R * R;
+  }
+
+  /// N_a of eq. (A2) for the real particles, from the current neighbour lists.
+  template <bool E>
+  std::vector<double> neighbour_numbers(const ParticleSet<D, E>& p, const neighbors::NeighborList& nl) const {
+    std::vector<double> N(p.n_real);
+    for (std::size_t a = 0; a < p.n_real; ++a) {
+      double n_a = 0.0;  // eq. (A1): the particle itself left out
+      for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
+        const std::uint32_t b = nl.index[k];
+        n_a += kernel::W<Kernel, D>((p.x[a] - p.x[b]).norm(), 0.5 * (p.h[a] + p.h[b]));
+      }
+      N[a] = interaction_volume(p.h[a]) * n_a;
+    }
+    return N;
+  }
+
+  template <bool E>
+  bool due(const ParticleSet<D, E>& p, const Box<D>&, const StepInfo& s) {
+    last_reason = 0;
+    if (s.steps_since_last >= max_steps) return (last_reason = 4), true;
+    if (!s.neighbors) return false;
+    const auto& nl = *s.neighbors;
+    const std::vector<double> N = neighbour_numbers(p, nl);
+    auto N_of = [&](std::uint32_t b) { return N[b < p.n_real ? b : p.ghost_source[b - p.n_real]]; };
+    for (std::size_t a = 0; a < p.n_real; ++a) {
+      if (N[a] < N_min) return (last_reason = 1), true;  // eq. (A5)
+      if (N[a] > N_max) return (last_reason = 2), true;
+      // eq. (A4): <N>_a = sum_b m_b / rho_b N_b W_ab, the particle itself included
+      double mean = p.m[a] / p.rho[a] * N[a] * kernel::W<Kernel, D>(0.0, p.h[a]);
+      for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
+        const std::uint32_t b = nl.index[k];
+        mean += p.m[b] / p.rho[b] * N_of(b) * kernel::W<Kernel, D>((p.x[a] - p.x[b]).norm(), 0.5 * (p.h[a] + p.h[b]));
+      }
+      const double dN = (N[a] - mean) / N[a];  // eq. (A3)
+      if (std::abs(dN) > dN_max) return (last_reason = 3), true;  // eq. (A6)
+    }
+    return false;
+  }
+};
+
+}  // namespace rsph::schedule
