@@ -27,6 +27,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <exception>
 #include <limits>
 #include <string>
 #include <unordered_map>
@@ -67,22 +68,17 @@ inline SitesWithImages add_periodic_images(const std::vector<Point>& x, const Bo
   for (int k = 0; k < 2; ++k) {
     if (!box.periodic(k)) continue;
     const double L = box.hi[k] - box.lo[k];
-    require(margin < L, "Voronoi cells: the periodic image margin exceeds the box");
+    const auto reach = static_cast<int>(std::ceil(margin / L));  // a wide margin needs several periods
     const std::size_t n = s.x.size();
-    for (std::size_t i = 0; i < n; ++i) {
-      Point p = s.x[i];
-      if (p[k] < box.lo[k] + margin) {
-        p[k] += L;
+    for (std::size_t i = 0; i < n; ++i)
+      for (int shift = -reach; shift <= reach; ++shift) {
+        if (shift == 0) continue;
+        Point p = s.x[i];
+        p[k] += shift * L;
+        if (p[k] < box.lo[k] - margin || p[k] > box.hi[k] + margin) continue;
         s.x.push_back(p);
         s.source.push_back(s.source[i]);
       }
-      p = s.x[i];
-      if (p[k] > box.hi[k] - margin) {
-        p[k] -= L;
-        s.x.push_back(p);
-        s.source.push_back(s.source[i]);
-      }
-    }
   }
   return s;
 }
@@ -139,16 +135,14 @@ inline double mean_spacing(const std::vector<Point>& x, const Box<2>& box) {
   return std::sqrt(extent / static_cast<double>(std::max<std::size_t>(x.size(), 1)));
 }
 
-/// Whether a cell reaches the edge of the region covered by images (then the margin was too small).
-inline bool touches_margin(const ConvexPolygon& cell, const Point& xa, const Box<2>& box, double margin) {
-  for (int k = 0; k < 2; ++k) {
-    if (!box.periodic(k)) continue;
-    const double tol = 1e-9 * (box.hi[k] - box.lo[k]);
-    for (int i = 0; i < cell.n; ++i) {
-      const double y = cell[i][k] + xa[k];
-      if (y <= box.lo[k] - margin + tol || y >= box.hi[k] + margin - tol) return true;
-    }
-  }
+/// Whether a cell may be missing a periodic image: its security disc (twice its farthest vertex
+/// distance) reaches beyond the band the images cover. Then the margin is widened and cells rebuilt.
+inline bool needs_more_images(const ConvexPolygon& cell, const Point& xa, const Box<2>& box, double margin) {
+  double r2 = 0.0;
+  for (int i = 0; i < cell.n; ++i) r2 = std::max(r2, cell[i].squaredNorm());
+  const double security = 2.0 * std::sqrt(r2);
+  for (int k = 0; k < 2; ++k)
+    if (box.periodic(k) && (xa[k] - security < box.lo[k] - margin || xa[k] + security > box.hi[k] + margin)) return true;
   return false;
 }
 
@@ -163,12 +157,15 @@ inline void check_coincident(const ConvexPolygon& cell, std::size_t a) {
     throw InputError("Voronoi cells: particle " + std::to_string(a) + " coincides with another particle");
 }
 
-template <class Visitor>
-void run_parallel(std::size_t n, Visitor&& body) {
+/// Runs body(thread, begin, end) over contiguous chunks of [0, n), one per thread. An exception
+/// thrown in a chunk is carried out of the parallel region and rethrown (the first one wins).
+template <class Body>
+void run_parallel(std::size_t n, Body&& body) {
   int n_threads = 1;
 #ifdef _OPENMP
   n_threads = omp_get_max_threads();
 #endif
+  std::exception_ptr error;
 #pragma omp parallel num_threads(n_threads)
   {
     int t = 0;
@@ -177,8 +174,14 @@ void run_parallel(std::size_t n, Visitor&& body) {
 #endif
     const std::size_t begin = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(n_threads);
     const std::size_t end = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(n_threads);
-    body(t, begin, end);
+    try {
+      body(t, begin, end);
+    } catch (...) {
+#pragma omp critical(rsph_parallel_error)
+      if (!error) error = std::current_exception();
+    }
   }
+  if (error) std::rethrow_exception(error);
 }
 
 }  // namespace detail
@@ -206,9 +209,9 @@ class LocalVoronoi {
       if (attempt > 0) visit.restart();
       if (try_build(x, box, closing_radius, margin, visit)) return;
       margin *= 2.0;
-      bool fits = true;
-      for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < box.hi[k] - box.lo[k];
-      if (!fits || attempt > 8)
+      bool fits = true;  // cells wider than twice the box: the set is too sparse to mean anything periodic
+      for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < 4.0 * (box.hi[k] - box.lo[k]);
+      if (!fits || attempt > 12)
         throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
     }
   }
@@ -247,7 +250,7 @@ class LocalVoronoi {
           if (cell.empty()) break;
         }
         detail::check_coincident(cell, a);
-        if (detail::touches_margin(cell, xa, box, margin)) {
+        if (detail::needs_more_images(cell, xa, box, margin)) {
           ok.store(false, std::memory_order_relaxed);
           break;
         }
@@ -272,9 +275,9 @@ class BoostVoronoi {
       if (attempt > 0) visit.restart();
       if (try_build(x, box, closing_radius, margin, visit)) return;
       margin *= 2.0;
-      bool fits = true;
-      for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < box.hi[k] - box.lo[k];
-      if (!fits || attempt > 8)
+      bool fits = true;  // cells wider than twice the box: the set is too sparse to mean anything periodic
+      for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < 4.0 * (box.hi[k] - box.lo[k]);
+      if (!fits || attempt > 12)
         throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
     }
   }
@@ -346,7 +349,7 @@ class BoostVoronoi {
           cut_group(nb);
         }
         detail::check_coincident(cell, a);
-        if (detail::touches_margin(cell, xa, box, margin)) {
+        if (detail::needs_more_images(cell, xa, box, margin)) {
           ok.store(false, std::memory_order_relaxed);
           break;
         }

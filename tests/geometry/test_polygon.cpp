@@ -1,0 +1,79 @@
+#include "rsph/geometry/polygon.hpp"
+
+// Boost.Geometry as the oracle, in plain double precision (its default rescaling to integers moves
+// results by ~1e-10).
+#define BOOST_GEOMETRY_NO_ROBUSTNESS
+#include <boost/geometry.hpp>
+#include <catch2/catch.hpp>
+
+#include <random>
+
+using namespace rsph::geometry;
+namespace bg = boost::geometry;
+using BgPoint = bg::model::d2::point_xy<double>;
+using BgPolygon = bg::model::polygon<BgPoint, false>;  // counter-clockwise
+
+namespace {
+BgPolygon to_bg(const ConvexPolygon& p) {
+  BgPolygon out;
+  for (int i = 0; i < p.n; ++i) bg::append(out.outer(), BgPoint(p[i].x(), p[i].y()));
+  bg::append(out.outer(), BgPoint(p[0].x(), p[0].y()));
+  return out;
+}
+double oracle_intersection_area(const ConvexPolygon& a, const ConvexPolygon& b) {
+  std::vector<BgPolygon> result;
+  bg::intersection(to_bg(a), to_bg(b), result);
+  double s = 0.0;
+  for (const auto& r : result) s += bg::area(r);
+  return s;
+}
+// A random convex polygon: the hull of points on a jittered circle, as a regular polygon cut by half-planes.
+ConvexPolygon random_convex(std::mt19937& rng, const Point& c, double R) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  ConvexPolygon p = ConvexPolygon::regular(c, R, 16);
+  for (int k = 0; k < 5; ++k) {
+    const double phi = 6.283185307179586 * u(rng);
+    const Point nrm(std::cos(phi), std::sin(phi));
+    clip_halfplane(p, nrm, nrm.dot(c) + R * (0.3 + 0.6 * u(rng)));
+  }
+  return p;
+}
+}  // namespace
+
+TEST_CASE("polygon area, centroid and half-plane clipping", "[geometry]") {
+  const auto sq = ConvexPolygon::rectangle(0, 0, 2, 1);
+  CHECK(area(sq) == Approx(2.0));
+  CHECK((centroid(sq) - Point(1.0, 0.5)).norm() < 1e-15);
+  ConvexPolygon half = sq;
+  clip_halfplane(half, Point(1, 0), 0.5);  // keep x <= 0.5
+  CHECK(area(half) == Approx(0.5));
+  ConvexPolygon none = sq;
+  clip_halfplane(none, Point(1, 0), -1.0);
+  CHECK(none.empty());
+  CHECK(area(ConvexPolygon::regular(Point(0, 0), 1.0, 6)) == Approx(1.5 * std::sqrt(3.0)));
+}
+
+TEST_CASE("clipping agrees with Boost.Geometry's intersection", "[geometry]") {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 300; ++trial) {
+    const ConvexPolygon a = random_convex(rng, Point(u(rng), u(rng)), 0.5 + 0.5 * std::abs(u(rng)));
+    const ConvexPolygon b = random_convex(rng, Point(u(rng), u(rng)), 0.5 + 0.5 * std::abs(u(rng)));
+    CHECK(area(clip_convex(a, b)) == Approx(oracle_intersection_area(a, b)).margin(1e-13));
+    const double x0 = u(rng), y0 = u(rng);
+    const auto rect = ConvexPolygon::rectangle(x0, y0, x0 + 0.4, y0 + 0.3);
+    CHECK(clipped_area_rect(a, x0, y0, x0 + 0.4, y0 + 0.3) == Approx(oracle_intersection_area(a, rect)).margin(1e-13));
+  }
+}
+
+TEST_CASE("rectangles tiling the plane partition a polygon's area to round-off", "[geometry]") {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 100; ++trial) {
+    const ConvexPolygon cell = random_convex(rng, Point(0.013, -0.021), 0.05);
+    const double dx = 0.0173;
+    double sum = 0.0;
+    for (int j = -5; j <= 5; ++j)
+      for (int i = -5; i <= 5; ++i) sum += clipped_area_rect(cell, i * dx, j * dx, (i + 1) * dx, (j + 1) * dx);
+    CHECK(std::abs(sum - area(cell)) / area(cell) < 1e-13);
+  }
+}

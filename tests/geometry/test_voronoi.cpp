@@ -1,0 +1,129 @@
+#include "rsph/geometry/voronoi.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <numeric>
+#include <random>
+
+using namespace rsph;
+using namespace rsph::geometry;
+
+namespace {
+
+std::vector<Point> jittered(int n, double jitter, unsigned seed, double shear = 0.0) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-jitter, jitter);
+  std::vector<Point> x;
+  const double dx = 1.0 / n;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      double px = (i + 0.5 + u(rng)) * dx + shear * ((j + 0.5) * dx - 0.5);
+      px -= std::floor(px);  // sheared rows wrap in the periodic x
+      x.emplace_back(px, (j + 0.5 + u(rng)) * dx);
+    }
+  return x;
+}
+
+/// O(N^2) oracle: each cell cut by every other point's bisector, images included.
+std::vector<double> brute_force_areas(const std::vector<Point>& x, const Box<2>& box) {
+  std::vector<double> out;
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    ConvexPolygon cell = detail::initial_cell(x[a], box, 1.0, 0.0), scratch;
+    for (std::size_t b = 0; b < x.size(); ++b)
+      for (int ix = -1; ix <= 1; ++ix)
+        for (int iy = -1; iy <= 1; ++iy) {
+          if ((ix != 0 && !box.periodic(0)) || (iy != 0 && !box.periodic(1))) continue;
+          if (b == a && ix == 0 && iy == 0) continue;
+          const Point img = x[b] + Point(ix * (box.hi[0] - box.lo[0]), iy * (box.hi[1] - box.lo[1]));
+          detail::cut_by_bisector(cell, img - x[a], scratch);
+        }
+    out.push_back(area(cell));
+  }
+  return out;
+}
+
+template <class B>
+std::vector<double> areas_of(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing = {}) {
+  B builder;
+  return cell_areas(builder, x, box, closing);
+}
+
+double sum(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
+
+Box<2> box_with(Edge ex, Edge ey) {
+  Box<2> b;
+  b.edge = {ex, ey};
+  return b;
+}
+
+}  // namespace
+
+TEST_CASE("Voronoi cells tile a periodic box and match the brute-force oracle", "[voronoi]") {
+  const auto box = box_with(Edge::periodic, Edge::periodic);
+  const auto x = jittered(14, 0.45, 1);
+  const auto oracle = brute_force_areas(x, box);
+  const auto local = areas_of<LocalVoronoi>(x, box);
+  const auto boost = areas_of<BoostVoronoi>(x, box);
+  CHECK(sum(local) == Approx(1.0).epsilon(1e-13));
+  CHECK(sum(boost) == Approx(1.0).epsilon(1e-13));
+  for (std::size_t a = 0; a < x.size(); ++a) {
+    CHECK(local[a] == Approx(oracle[a]).epsilon(1e-11));
+    CHECK(boost[a] == Approx(local[a]).epsilon(1e-9));
+  }
+}
+
+TEST_CASE("the local and Boost.Polygon builders agree on every cell", "[voronoi]") {
+  struct Case {
+    const char* name;
+    std::vector<Point> x;
+    Box<2> box;
+  };
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Point> clustered;
+  for (int c = 0; c < 6; ++c) {
+    const Point centre(0.15 + 0.7 * u(rng), 0.15 + 0.7 * u(rng));
+    for (int k = 0; k < 60; ++k) clustered.push_back(centre + 0.08 * Point(u(rng) - 0.5, u(rng) - 0.5));
+  }
+  for (int k = 0; k < 40; ++k) clustered.emplace_back(u(rng), u(rng));
+  const std::vector<Case> cases = {
+      {"jittered, walls", jittered(30, 0.4, 2), box_with(Edge::reflecting, Edge::reflecting)},
+      {"sheared (Keplerian-like), periodic x", jittered(30, 0.05, 3, 0.73), box_with(Edge::periodic, Edge::reflecting)},
+      {"clustered, periodic", clustered, box_with(Edge::periodic, Edge::periodic)},
+      {"regular lattice (co-circular points)", jittered(20, 0.0, 4), box_with(Edge::periodic, Edge::periodic)},
+  };
+  for (const auto& c : cases) {
+    INFO(c.name);
+    const auto local = areas_of<LocalVoronoi>(c.x, c.box);
+    const auto boost = areas_of<BoostVoronoi>(c.x, c.box);
+    CHECK(sum(local) == Approx(1.0).epsilon(1e-12));
+    double worst = 0.0;
+    for (std::size_t a = 0; a < c.x.size(); ++a) worst = std::max(worst, std::abs(local[a] - boost[a]) / local[a]);
+    CHECK(worst < 1e-9);
+  }
+}
+
+TEST_CASE("open edges close cells with a disc of the given radius", "[voronoi]") {
+  const auto box = box_with(Edge::open, Edge::open);
+  const std::vector<Point> x = {Point(0, 0), Point(1, 0), Point(0.5, 0.8)};
+  const std::vector<double> R(3, 0.3);
+  const auto a = areas_of<LocalVoronoi>(x, box, R);
+  const auto b = areas_of<BoostVoronoi>(x, box, R);
+  for (std::size_t i = 0; i < 3; ++i) {
+    CHECK(a[i] > 0.9 * 3.14159 * 0.09);  // isolated: the whole (32-gon) disc
+    CHECK(a[i] < 1.01 * 3.14159 * 0.09);
+    CHECK(b[i] == Approx(a[i]).epsilon(1e-12));
+  }
+}
+
+TEST_CASE("coincident particles and particles outside the domain are refused", "[voronoi]") {
+  auto x = jittered(8, 0.2, 6);
+  const auto box = box_with(Edge::periodic, Edge::periodic);
+  auto dup = x;
+  dup[10] = dup[11];
+  CHECK_THROWS_WITH(areas_of<LocalVoronoi>(dup, box), Catch::Contains("coincides with another particle"));
+  CHECK_THROWS_WITH(areas_of<BoostVoronoi>(dup, box), Catch::Contains("coincides with another particle"));
+  auto out = x;
+  out[3] = Point(1.5, 0.5);
+  CHECK_THROWS_WITH(areas_of<LocalVoronoi>(out, box), Catch::Contains("particle 3 lies outside the domain"));
+}
