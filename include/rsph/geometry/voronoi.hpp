@@ -110,13 +110,15 @@ inline ConvexPolygon initial_cell(const Point& xa, const Box<2>& box, double mar
 }
 
 /// Cuts `cell` (relative to x_a) by the bisector with a site at relative position d: keeps |y| <= |y - d|.
-inline void cut_by_bisector(ConvexPolygon& cell, const Point& d, ConvexPolygon& scratch) {
+/// Returns whether the cell changed.
+inline bool cut_by_bisector(ConvexPolygon& cell, const Point& d, ConvexPolygon& scratch) {
   const double offset = 0.5 * d.squaredNorm();
   bool cuts = false;  // most candidates miss the cell: test before copying
   for (int i = 0; i < cell.n && !cuts; ++i) cuts = d.dot(cell[i]) > offset;
-  if (!cuts) return;
+  if (!cuts) return false;
   clip_halfplane(cell, d, offset, scratch);
   cell = scratch;
+  return true;
 }
 
 /// Mean spacing of n points in the box (open axes: their bounding box).
@@ -231,23 +233,33 @@ class LocalVoronoi {
       for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
         const Point xa = sites.x[a];
         cell = detail::initial_cell(xa, box, margin, closing_radius.empty() ? 0.0 : closing_radius[a]);
-        for (std::int64_t ring = 0; ring <= max_ring; ++ring) {
+        double r2_max = detail::max_radius2_origin(cell);
+        // Cuts by the points of `ring_points`. The result does not depend on the order (a cell is the
+        // intersection of half-planes); a point beyond twice the farthest vertex cannot cut. Sorting by
+        // distance saves a few clips but cost more than it saved (measured: 37 % of the build time).
+        auto cut_all = [&] {
+          for (const auto& [d2, b] : ring_points) {
+            if (d2 > 4.0 * r2_max) continue;
+            if (d2 == 0.0) {
+              cell.clear();
+              return;
+            }
+            if (detail::cut_by_bisector(cell, sites.x[b] - xa, scratch)) r2_max = detail::max_radius2_origin(cell);
+          }
+        };
+        ring_points.clear();
+        cells.for_each_candidate(xa, [&](std::uint32_t b) {  // rings 0 and 1 at once
+          if (b != a) ring_points.emplace_back((sites.x[b] - xa).squaredNorm(), b);
+        });
+        cut_all();
+        for (std::int64_t ring = 2; ring <= max_ring && !cell.empty(); ++ring) {
           // stop once every unseen point lies beyond the security radius
-          if (ring >= 1 && cells.unseen_distance(xa, ring - 1) > 2.0 * std::sqrt(detail::max_radius2_origin(cell))) break;
+          if (cells.unseen_distance(xa, ring - 1) > 2.0 * std::sqrt(r2_max)) break;
           ring_points.clear();
           cells.for_each_in_ring(xa, ring, [&](std::uint32_t b) {
             if (b != a) ring_points.emplace_back((sites.x[b] - xa).squaredNorm(), b);
           });
-          std::sort(ring_points.begin(), ring_points.end());
-          for (const auto& [d2, b] : ring_points) {
-            if (d2 > 4.0 * detail::max_radius2_origin(cell)) break;  // nearest first: the rest cannot cut
-            if (d2 == 0.0) {
-              cell.clear();
-              break;
-            }
-            detail::cut_by_bisector(cell, sites.x[b] - xa, scratch);
-          }
-          if (cell.empty()) break;
+          cut_all();
         }
         detail::check_coincident(cell, a);
         if (detail::needs_more_images(cell, xa, box, margin)) {

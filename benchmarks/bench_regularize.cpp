@@ -1,0 +1,98 @@
+// The regularization microbenchmarks: building all Voronoi cells (local half-plane builder vs
+// Boost.Polygon) and the full remap (cells, overlaps, new particles), on a jittered lattice and on a
+// lattice sheared as by Keplerian rotation. items_per_second = old particles per second.
+#include "rsph/rsph.hpp"
+
+#include <benchmark/benchmark.h>
+
+#include <random>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+using namespace rsph;
+
+namespace {
+
+enum Layout { jittered = 0, sheared = 1 };
+
+ParticleSet<2, true> make_set(std::int64_t n_particles, int layout) {
+  const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(n_particles))));
+  const double dx = 1.0 / n;
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  ParticleSet<2, true> p;
+  p.reserve(static_cast<std::size_t>(n) * n);
+  for (int j = 0; j < n; ++j) {
+    const double y = (j + 0.5) * dx;
+    // Keplerian-like shear: rows slide by an amount that grows with y (several spacings between rows)
+    const double shift = layout == sheared ? 7.3 * y * y : 0.0;
+    for (int i = 0; i < n; ++i) {
+      double x = (i + 0.5) * dx + shift + (layout == jittered ? u(rng) * dx : 0.0);
+      x -= std::floor(x);
+      p.add(dx * dx, Vec<2>(x, std::clamp(y + (layout == jittered ? u(rng) * dx : 0.0), 0.0, 1.0)), Vec<2>(u(rng), u(rng)),
+            1.2 * dx, 1.0);
+    }
+  }
+  return p;
+}
+
+Box<2> domain() {
+  Box<2> b;
+  b.edge = {Edge::periodic, Edge::reflecting};
+  return b;
+}
+
+void set_threads(const benchmark::State& state) {
+#ifdef _OPENMP
+  omp_set_num_threads(state.range(2) == 0 ? omp_get_num_procs() : static_cast<int>(state.range(2)));
+#else
+  (void)state;
+#endif
+}
+
+template <class Builder>
+void BM_cells(benchmark::State& state) {
+  set_threads(state);
+  const auto p = make_set(state.range(0), static_cast<int>(state.range(1)));
+  Builder builder;
+  double total = 0.0;
+  for (auto _ : state) {
+    const auto areas = geometry::cell_areas(builder, p.x, domain());
+    total = areas[0];
+  }
+  benchmark::DoNotOptimize(total);
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.n_real));
+  state.SetComplexityN(static_cast<std::int64_t>(p.n_real));
+}
+
+void BM_remap(benchmark::State& state) {
+  set_threads(state);
+  const auto p0 = make_set(state.range(0), static_cast<int>(state.range(1)));
+  const double dx = 1.0 / std::lround(std::sqrt(static_cast<double>(p0.n_real)));
+  geometry::LocalVoronoi builder;
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto p = p0;
+    state.ResumeTiming();
+    const auto stats = regularize::remap_onto_lattice(p, domain(), lattice::Square{dx}, builder, regularize::RemapParams{});
+    benchmark::DoNotOptimize(stats.n_after);
+  }
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p0.n_real));
+  state.SetComplexityN(static_cast<std::int64_t>(p0.n_real));
+}
+
+// {particles, layout (0 jittered, 1 sheared), threads (0: all)}
+void sizes(benchmark::internal::Benchmark* b) {
+  for (int layout : {jittered, sheared})
+    for (int t : {1, 0})
+      for (std::int64_t n : {1000, 10000, 100000, 1000000}) b->Args({n, layout, t});
+  b->Unit(benchmark::kMillisecond)->UseRealTime()->Complexity(benchmark::oN);
+}
+
+}  // namespace
+
+BENCHMARK_TEMPLATE(BM_cells, geometry::LocalVoronoi)->Apply(sizes);
+BENCHMARK_TEMPLATE(BM_cells, geometry::BoostVoronoi)->Apply(sizes);
+BENCHMARK(BM_remap)->Apply(sizes);
+BENCHMARK_MAIN();
