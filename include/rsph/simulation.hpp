@@ -361,6 +361,7 @@ class Simulation {
                 if (p_.frozen[a]) t.prescribe(a, p_.x[a], p_.v[a], time_);
           };
           (apply_motion(term), ...);
+          (void)apply_motion;  // unused when the scene names no terms
         },
         terms_);
   }
