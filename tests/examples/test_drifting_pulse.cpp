@@ -47,3 +47,12 @@ TEST_CASE("drifting pulse: widths grow monotonically; half a spacing diffuses mo
   // per regularization, against the paper's cases: 0.5 spreads the pulse fastest
   CHECK((c.widths[1] - c.widths[0]) > (b.widths[1] - b.widths[0]));
 }
+
+TEST_CASE("drifting pulse: the variance grows by s(1 - s) Delta^2 per regularization", "[drifting_pulse]") {
+  // Each remap hands the fraction s of every cell's excess mass to the next cell: a random walk.
+  for (double s : {0.01, 0.1, 0.5}) {
+    const auto r = run(s);
+    for (std::size_t k = 0; k < r.widths.size(); ++k)
+      CHECK(r.widths[k] * r.widths[k] == Approx(r.widths[0] * r.widths[0] + 10.0 * k * s * (1.0 - s)).epsilon(1e-9));
+  }
+}
