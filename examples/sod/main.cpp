@@ -62,7 +62,7 @@ int run(const Options& opt) {
   }
   ex_csv.close();
 
-  const auto err = scenes::shock_tube_errors(p, exact, sim.time(), 0.5);
+  const auto err = analysis::shock_tube_errors(p, exact, sim.time(), 0.5);
   const auto end = sim.totals();
   io::Json summary;
   summary.set("test", "sod").set("dim", D).set("kernel", opt.kernel).set("particles", static_cast<std::uint64_t>(p.n_real));

@@ -2,6 +2,7 @@
 // Umbrella header of the rsph engine (Eigen and Boost headers only). I/O lives in rsph/io/ and needs
 // the rsph::io target (HDF5, fmt).
 #include "rsph/analysis/riemann.hpp"
+#include "rsph/analysis/shock_tube.hpp"
 #include "rsph/boundary/frozen.hpp"
 #include "rsph/boundary/ghosts.hpp"
 #include "rsph/core/diagnostics.hpp"
@@ -21,6 +22,7 @@
 #include "rsph/kernel/wendland.hpp"
 #include "rsph/neighbors/cell_list.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
+#include "rsph/physics/artificial_conductivity.hpp"
 #include "rsph/physics/artificial_viscosity.hpp"
 #include "rsph/physics/concept.hpp"
 #include "rsph/physics/hydro.hpp"

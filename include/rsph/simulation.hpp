@@ -41,6 +41,8 @@ class Simulation {
   static_assert(check_equation_of_state<EOS, D>());
   static_assert(check_regularizer<Reg, D, EOS::has_internal_energy>());
   static_assert((check_term<Terms, D>() && ...));
+  static_assert(((!requires { Terms::needs_internal_energy; } || EOS::has_internal_energy) && ...),
+                "a term that conducts heat needs an equation of state that carries internal energy");
 
  public:
   static constexpr int dim = D;
@@ -290,7 +292,10 @@ class Simulation {
     for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
     const double reach = Kernel::support * h_max * margin;
     boundary::make_ghosts(p_, box_, reach);
-    cells_.build(p_.x, reach);
+    // Cells sized by the median h: particles with larger h search more cells (neighbor_list.hpp).
+    h_scratch_.assign(p_.h.begin(), p_.h.begin() + static_cast<std::ptrdiff_t>(n));
+    std::nth_element(h_scratch_.begin(), h_scratch_.begin() + static_cast<std::ptrdiff_t>(n / 2), h_scratch_.end());
+    cells_.build(p_.x, Kernel::support * h_scratch_[n / 2] * margin);
     if constexpr (grad_h)
       neighbors::build_neighbor_list<D>(p_.x, p_.h, n, neighbors::MaxH{Kernel::support, margin}, cells_, nl_);
     else
@@ -420,6 +425,7 @@ class Simulation {
   neighbors::CellList<D> cells_;
   neighbors::NeighborList nl_;
   std::vector<double> v_sig_;
+  std::vector<double> h_scratch_;
   std::vector<double> Omega_;  ///< grad-h factors (real and ghosts), only with a smoothing-length solver
   std::vector<Vec<D>> v_half_;
   typename Particles::EnergyField u_half_;

@@ -6,7 +6,7 @@ using namespace rsph;
 
 namespace {
 struct SodRun {
-  scenes::ShockTubeErrors errors;
+  analysis::ShockTubeErrors errors;
   double energy_drift;
 };
 SodRun run_sod_1d(int n_left) {
@@ -17,7 +17,7 @@ SodRun run_sod_1d(int n_left) {
   sim.run_until(s.t_end);
   const auto end = sim.totals();
   const analysis::ExactRiemann exact(s.left, s.right, s.gamma);
-  return {scenes::shock_tube_errors(sim.particles(), exact, sim.time(), 0.5),
+  return {analysis::shock_tube_errors(sim.particles(), exact, sim.time(), 0.5),
           std::abs(end.total_energy() - start.total_energy()) / start.total_energy()};
 }
 }  // namespace
@@ -41,7 +41,7 @@ TEST_CASE("Sod as a 2D strip matches the exact solution", "[sod]") {
   const auto start = sim.totals();
   sim.run_until(s.t_end);
   const analysis::ExactRiemann exact(s.left, s.right, s.gamma);
-  const auto e = scenes::shock_tube_errors(sim.particles(), exact, sim.time(), 0.5);
+  const auto e = analysis::shock_tube_errors(sim.particles(), exact, sim.time(), 0.5);
   INFO("2D L1(rho) = " << e.L1_rho);
   CHECK(e.L1_rho < 0.03);
   CHECK(std::abs(sim.totals().total_energy() - start.total_energy()) / start.total_energy() < 1e-3);

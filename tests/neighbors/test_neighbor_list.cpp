@@ -11,9 +11,10 @@ using namespace rsph;
 namespace {
 
 template <int D, class Reach>
-void compare_with_brute_force(unsigned seed, std::array<Edge, D> edges, Reach reach, double support_factor) {
+void compare_with_brute_force(unsigned seed, std::array<Edge, D> edges, Reach reach, double support_factor,
+                              double h_lo = 0.02, double h_hi = 0.05) {
   std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(0.0, 1.0), hu(0.02, 0.05);
+  std::uniform_real_distribution<double> u(0.0, 1.0), hu(h_lo, h_hi);
   ParticleSet<D, false> p;
   Box<D> box;
   box.edge = edges;
@@ -24,10 +25,11 @@ void compare_with_brute_force(unsigned seed, std::array<Edge, D> edges, Reach re
     p.add(1.0, x, Vec<D>::Zero(), hu(rng));
   }
   const double h_max = *std::max_element(p.h.begin(), p.h.end());
+  const double h_min = *std::min_element(p.h.begin(), p.h.end());
   const double width = support_factor * h_max;
   boundary::make_ghosts(p, box, width);
   neighbors::CellList<D> cells;
-  cells.build(p.x, width);
+  cells.build(p.x, support_factor * h_min);  // small cells: large-h particles search several rings
   neighbors::NeighborList nl;
   neighbors::build_neighbor_list<D>(p.x, p.h, p.n_real, reach, cells, nl);
 
@@ -71,6 +73,12 @@ TEST_CASE("cell list finds exactly the brute-force pairs in periodic boxes", "[n
 
 TEST_CASE("grad-h search radius support * max(h_a, h_b)", "[neighbors]") {
   compare_with_brute_force<2>(8, {Edge::periodic, Edge::periodic}, neighbors::MaxH{2.0, 1.25}, 2.5);
+}
+
+TEST_CASE("smoothing lengths spread over a factor 10: pairs seen only from the larger h are kept", "[neighbors]") {
+  compare_with_brute_force<2>(10, {Edge::periodic, Edge::periodic}, neighbors::MeanH{2.0}, 2.0, 0.008, 0.08);
+  compare_with_brute_force<2>(11, {Edge::periodic, Edge::open}, neighbors::MaxH{2.0, 1.25}, 2.5, 0.008, 0.08);
+  compare_with_brute_force<1>(12, {Edge::periodic}, neighbors::MeanH{3.0}, 3.0, 0.002, 0.02);
 }
 
 TEST_CASE("reflecting walls add mirror images and keep real pairs", "[neighbors]") {

@@ -82,3 +82,34 @@ TEST_CASE("the artificial viscosity pair term: eq. (3)-(4) shares and zero for r
   CHECK(rates.du_dt == Approx(0.5 * Pi * pr.v_ab.dot(pr.grad_W)));
   CHECK(rates.du_dt > 0.0);  // viscosity heats
 }
+
+TEST_CASE("artificial conductivity: heat flows from hot to cold and the energy sum is unchanged", "[physics]") {
+  ParticleSet<1, true> p;
+  p.add(1.0, Vec<1>(0.0), Vec<1>(0.0), 1.0, 2.0);  // hot
+  p.add(1.0, Vec<1>(0.8), Vec<1>(0.0), 1.0, 1.0);  // cold
+  Box<1> box;  // open: two particles alone
+  Simulation<1, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialConductivity> sim(
+      p, box, eos::IdealGas{5.0 / 3.0}, {}, {}, physics::ArtificialConductivity{1.0});
+  const auto& q = sim.particles();
+  CHECK(q.du_dt[0] < 0.0);
+  CHECK(q.du_dt[1] > 0.0);
+  CHECK(q.m[0] * q.du_dt[0] + q.m[1] * q.du_dt[1] == Approx(0.0).margin(1e-15));
+  // the term alone (no pressure): equal and opposite, and zero for equal energies
+  physics::Pair<1> pr;
+  pr.r_ab = Vec<1>(-0.8);
+  pr.r = 0.8;
+  pr.grad_W = kernel::grad_W<kernel::CubicSpline, 1>(pr.r_ab, pr.r, 1.0);
+  pr.m_b = 1.0;
+  pr.rho_a = pr.rho_b = 1.0;
+  pr.P_a = 2.0;
+  pr.P_b = 1.0;
+  pr.u_a = 3.0;
+  pr.u_b = 1.0;
+  const double du_a = physics::ArtificialConductivity{1.0}.pair(pr).du_dt;
+  std::swap(pr.u_a, pr.u_b);
+  std::swap(pr.P_a, pr.P_b);
+  pr.r_ab = -pr.r_ab;
+  pr.grad_W = -pr.grad_W;
+  CHECK(physics::ArtificialConductivity{1.0}.pair(pr).du_dt == Approx(-du_a));
+  CHECK(du_a < 0.0);
+}

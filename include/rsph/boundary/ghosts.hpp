@@ -3,6 +3,8 @@
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/particle_set.hpp"
 
+#include <cmath>
+
 namespace rsph::boundary {
 
 /// Rebuilds the ghosts of `p` for every periodic or reflecting axis of `box`: a particle within
@@ -16,19 +18,29 @@ void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
     if (box.edge[k] == Edge::open) continue;
     const double lo = box.lo[k], hi = box.hi[k], L = hi - lo;
     const std::size_t n = p.size();
+    if (box.edge[k] == Edge::periodic) {
+      // a layer wider than the box needs images from several periods
+      const int reach = static_cast<int>(std::ceil(width / L));
+      for (std::size_t i = 0; i < n; ++i)
+        for (int shift = -reach; shift <= reach; ++shift) {
+          if (shift == 0) continue;
+          Vec<D> g = p.x[i];
+          g[k] += shift * L;
+          if (g[k] >= lo - width && g[k] <= hi + width) p.add_ghost(i, g, Vec<D>(p.v[i]));
+        }
+      continue;
+    }
     for (std::size_t i = 0; i < n; ++i) {
       const Vec<D> xi = p.x[i];
       const Vec<D> vi = p.v[i];
+      Vec<D> g = xi, w = vi;
+      w[k] = -vi[k];
       if (xi[k] < lo + width) {
-        Vec<D> g = xi, w = vi;
-        if (box.edge[k] == Edge::periodic) g[k] += L;
-        else { g[k] = 2.0 * lo - xi[k]; w[k] = -vi[k]; }
+        g[k] = 2.0 * lo - xi[k];
         p.add_ghost(i, g, w);
       }
       if (xi[k] > hi - width) {
-        Vec<D> g = xi, w = vi;
-        if (box.edge[k] == Edge::periodic) g[k] -= L;
-        else { g[k] = 2.0 * hi - xi[k]; w[k] = -vi[k]; }
+        g[k] = 2.0 * hi - xi[k];
         p.add_ghost(i, g, w);
       }
     }

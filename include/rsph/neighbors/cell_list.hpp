@@ -72,6 +72,28 @@ class CellList {
     }
   }
 
+  /// Calls f(j) for every point j in the cells that meet the square of half-width `radius` around p
+  /// (a superset of the points closer than `radius`).
+  template <class F>
+  void for_each_within(const Vec<D>& p, double radius, F&& f) const {
+    std::array<std::int64_t, D> lo, hi;
+    for (int k = 0; k < D; ++k) {
+      lo[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - radius - lo_[k]) * inv_size_)), 0, dims_[k] - 1);
+      hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)), 0, dims_[k] - 1);
+    }
+    std::array<std::int64_t, D> idx = lo;
+    for (;;) {
+      const std::size_t cell = cell_index(idx);
+      for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s]);
+      int k = 0;
+      for (; k < D; ++k) {
+        if (++idx[k] <= hi[k]) break;
+        idx[k] = lo[k];
+      }
+      if (k == D) break;
+    }
+  }
+
   /// Calls f(j) for every point j in the cells at Chebyshev distance exactly `ring` from p's cell.
   /// Every point outside rings 0..k lies farther than k * cell_size() from p.
   template <class F>

@@ -34,8 +34,10 @@ struct MaxH {
   double operator()(double ha, double hb) const { return support * margin * std::max(ha, hb); }
 };
 
-/// Neighbours of the first n_query points among all of x (ghosts included), found through `cells`:
-/// every b != a with |x_a - x_b| < reach(h_a, h_b).
+/// Neighbours of the first n_query points among all of x (ghosts included): every b != a with
+/// |x_a - x_b| < reach(h_a, h_b). Works for any spread of h: each point a gathers within its own radius
+/// reach(h_a, h_a); a point b with a larger radius scatters itself onto the a's that could not see it.
+/// `cells` must be built over all of x; its cell size may be smaller than the largest radius.
 template <int D, class Reach>
 void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>& h, std::size_t n_query,
                          Reach reach_of, const CellList<D>& cells, NeighborList& out) {
@@ -44,40 +46,89 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
 #ifdef _OPENMP
   n_threads = omp_get_max_threads();
 #endif
-  std::vector<std::vector<std::uint32_t>> local(static_cast<std::size_t>(n_threads));
-  std::vector<std::size_t> begin(static_cast<std::size_t>(n_threads) + 1, 0);
-  for (int t = 0; t <= n_threads; ++t) begin[static_cast<std::size_t>(t)] = n_query * static_cast<std::size_t>(t) / static_cast<std::size_t>(n_threads);
+  const std::size_t T = static_cast<std::size_t>(n_threads);
+  std::vector<std::vector<std::uint32_t>> local(T);
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> extra(T);  // (a, b) found from b's side
+  const std::size_t n_all = x.size();
+  auto chunk = [](std::size_t n, std::size_t t, std::size_t parts) { return n * t / parts; };
 
 #pragma omp parallel num_threads(n_threads)
   {
-    int t = 0;
+    std::size_t t = 0;
 #ifdef _OPENMP
-    t = omp_get_thread_num();
+    t = static_cast<std::size_t>(omp_get_thread_num());
 #endif
-    auto& buf = local[static_cast<std::size_t>(t)];
+    auto& buf = local[t];
+    auto& ext = extra[t];
     buf.clear();
-    for (std::size_t a = begin[static_cast<std::size_t>(t)]; a < begin[static_cast<std::size_t>(t) + 1]; ++a) {
+    ext.clear();
+    // gather: a sees the b within its own radius
+    for (std::size_t a = chunk(n_query, t, T); a < chunk(n_query, t + 1, T); ++a) {
       const Vec<D> xa = x[a];
       const double ha = h[a];
+      const double own = reach_of(ha, ha);
       std::uint64_t n = 0;
-      cells.for_each_candidate(xa, [&](std::uint32_t b) {
+      cells.for_each_within(xa, own, [&](std::uint32_t b) {
         if (b == a) return;
         const double reach = reach_of(ha, h[b]);
-        if ((xa - x[b]).squaredNorm() < reach * reach) {
+        const double r2 = (xa - x[b]).squaredNorm();
+        if (r2 < reach * reach && r2 < own * own) {
           buf.push_back(b);
           ++n;
         }
       });
       out.offset[a + 1] = n;
     }
+    // scatter: b with a larger radius finds the query points a that did not reach it
+    for (std::size_t b = chunk(n_all, t, T); b < chunk(n_all, t + 1, T); ++b) {
+      const Vec<D> xb = x[b];
+      const double hb = h[b];
+      const double own_b = reach_of(hb, hb);
+      cells.for_each_within(xb, own_b, [&](std::uint32_t a) {
+        if (a >= n_query || a == b) return;
+        const double own_a = reach_of(h[a], h[a]);
+        if (own_a >= own_b) return;  // a's own gather covers this pair
+        const double reach = reach_of(h[a], hb);
+        const double r2 = (x[a] - xb).squaredNorm();
+        if (r2 < reach * reach && r2 >= own_a * own_a) ext.emplace_back(a, static_cast<std::uint32_t>(b));
+      });
+    }
   }
-  for (std::size_t a = 0; a < n_query; ++a) out.offset[a + 1] += out.offset[a];
+  std::size_t n_extra = 0;
+  for (const auto& e : extra) n_extra += e.size();
+  if (n_extra == 0) {
+    for (std::size_t a = 0; a < n_query; ++a) out.offset[a + 1] += out.offset[a];
+    out.index.resize(out.offset[n_query]);
+    std::size_t pos = 0;
+    for (const auto& buf : local) {
+      std::copy(buf.begin(), buf.end(), out.index.begin() + static_cast<std::ptrdiff_t>(pos));
+      pos += buf.size();
+    }
+    return;
+  }
+  // Merge the scattered pairs: counts first, then each a's gathered list followed by its extras.
+  std::vector<std::uint64_t> gathered(n_query);
+  for (std::size_t a = 0; a < n_query; ++a) gathered[a] = out.offset[a + 1];
+  std::vector<std::uint64_t> gathered_start(n_query + 1, 0);
+  for (std::size_t a = 0; a < n_query; ++a) gathered_start[a + 1] = gathered_start[a] + gathered[a];
+  std::vector<std::uint64_t> extra_count(n_query, 0);
+  for (const auto& e : extra)
+    for (const auto& pr : e) ++extra_count[pr.first];
+  out.offset[0] = 0;
+  for (std::size_t a = 0; a < n_query; ++a) out.offset[a + 1] = out.offset[a] + gathered[a] + extra_count[a];
   out.index.resize(out.offset[n_query]);
-#pragma omp parallel for num_threads(n_threads)
-  for (int t = 0; t < n_threads; ++t) {
-    const auto& buf = local[static_cast<std::size_t>(t)];
-    std::copy(buf.begin(), buf.end(), out.index.begin() + static_cast<std::ptrdiff_t>(out.offset[begin[static_cast<std::size_t>(t)]]));
+  std::vector<std::uint32_t> all_gathered;
+  all_gathered.reserve(gathered_start[n_query]);
+  for (const auto& buf : local) all_gathered.insert(all_gathered.end(), buf.begin(), buf.end());
+  std::vector<std::uint64_t> fill(n_query);
+  for (std::size_t a = 0; a < n_query; ++a) {
+    std::copy(all_gathered.begin() + static_cast<std::ptrdiff_t>(gathered_start[a]),
+              all_gathered.begin() + static_cast<std::ptrdiff_t>(gathered_start[a + 1]),
+              out.index.begin() + static_cast<std::ptrdiff_t>(out.offset[a]));
+    fill[a] = out.offset[a] + gathered[a];
   }
+  for (const auto& e : extra)
+    for (const auto& pr : e) out.index[fill[pr.first]++] = pr.second;
 }
 
 /// O(N^2) oracle: every b with |separation(x_a, x_b)| < reach(h_a, h_b), using minimum images when

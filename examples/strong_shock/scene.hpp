@@ -1,0 +1,185 @@
+#pragma once
+// §3.2 of the paper: the Xiao (2004) shock tube, pressure ratio 1e10, t = 2.5e-6, in 2D as a strip
+// periodic in y with walls at x = 0 and 1. RSPH (h/Delta = 2, adaptive regularization of Appendix A)
+// against plain SPH (grad-h, Monaghan-Gingold viscosity).
+#include "rsph/rsph.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace rsph::scenes {
+
+struct StrongShockParams {
+  analysis::GasState left{1.0, 0.0, 1e10}, right{0.125, 0.0, 0.1};
+  double gamma = 1.4;
+  double t_end = 2.5e-6;
+  double courant = 0.3;
+  double alpha = 1.0, beta = 2.0;  ///< Monaghan-Gingold viscosity (both methods)
+  // RSPH: a uniform lattice of nx x ny with h/Delta = 2 and the paper's Appendix A parameters
+  int nx = 512, ny = 8;
+  double h_over_dx = 2.0;
+  double N_min = 9.5, N_max = 308.0, dN_max = 0.4;
+  std::uint64_t max_steps = 128;
+  // plain SPH: the paper's counts, 800 x 32 left and 100 x 4 right, h = eta (m / rho)^(1/2)
+  int sph_nx_left = 800, sph_ny_left = 32, sph_nx_right = 100, sph_ny_right = 4;
+  double eta = 1.2;
+
+  void validate() const {
+    require(nx >= 16 && ny >= 4, "strong shock: the RSPH lattice needs nx >= 16 and ny >= 4");
+    require(h_over_dx > 0.0, "strong shock: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
+    require(eta > 0.0, "strong shock: eta must be positive");
+    require(sph_nx_left > 0 && sph_ny_left > 0 && sph_nx_right > 0 && sph_ny_right > 0,
+            "strong shock: SPH particle counts must be positive");
+    require(std::abs(double(sph_ny_left) / sph_nx_left - double(sph_ny_right) / sph_nx_right) < 1e-12,
+            "strong shock: the SPH blocks must tile the same strip width (ny/nx equal left and right)");
+    require(t_end > 0.0, "strong shock: t_end must be positive");
+    require(gamma > 1.0, "strong shock: gamma must exceed 1");
+  }
+  double strip_width_rsph() const { return double(ny) / nx; }
+  double strip_width_sph() const { return 0.5 * sph_ny_left / sph_nx_left; }
+};
+
+/// What a run leaves for the report.
+struct ShockRun {
+  std::vector<double> x, y, rho, v, P, u, h;
+  analysis::ShockTubeErrors errors;
+  double shock_position = 0.0, shock_position_exact = 0.0, contact_exact = 0.0;
+  double penetration = 0.0;  ///< fraction of particles beyond contact + 2h that carry left-state gas
+  double energy_error = 0.0, wall_seconds = 0.0, regularization_seconds = 0.0;
+  std::uint64_t steps = 0, updates = 0, regularizations = 0, particles = 0;
+  double mean_particles = 0.0;
+};
+
+namespace detail {
+
+/// Adds a block of lattice particles with masses such that the SPH density of the lattice is rho.
+template <class Kernel, class P>
+void add_block(P& p, const analysis::GasState& s, const eos::IdealGas& gas, double x0, int nx, int ny, double dx,
+               double h_over_dx) {
+  const double m = s.rho * dx * dx / kernel::lattice_sum<Kernel, 2>(h_over_dx);
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i)
+      p.add(m, Vec<2>(x0 + (i + 0.5) * dx, (j + 0.5) * dx), Vec<2>(s.v, 0.0), h_over_dx * dx, gas.internal_energy(s.rho, s.P));
+}
+
+/// The shock: the largest x whose Delta-wide bin has mean density above the midpoint of the pre- and
+/// post-shock densities.
+template <class P>
+double shock_position(const P& p, double threshold, double bin) {
+  const int n = static_cast<int>(std::ceil(1.0 / bin));
+  std::vector<double> sum(static_cast<std::size_t>(n), 0.0), count(static_cast<std::size_t>(n), 0.0);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const int i = std::clamp(static_cast<int>(p.x[a][0] / bin), 0, n - 1);
+    sum[static_cast<std::size_t>(i)] += p.rho[a];
+    count[static_cast<std::size_t>(i)] += 1.0;
+  }
+  for (int i = n - 1; i >= 0; --i)
+    if (count[static_cast<std::size_t>(i)] > 0 && sum[static_cast<std::size_t>(i)] / count[static_cast<std::size_t>(i)] > threshold)
+      return (i + 1) * bin;
+  return 0.0;
+}
+
+template <class Sim>
+ShockRun finish(Sim& sim, const StrongShockParams& s, double wall0_seconds) {
+  const analysis::ExactRiemann exact(s.left, s.right, s.gamma);
+  ShockRun r;
+  const auto& p = sim.particles();
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    r.x.push_back(p.x[a][0]);
+    r.y.push_back(p.x[a][1]);
+    r.rho.push_back(p.rho[a]);
+    r.v.push_back(p.v[a][0]);
+    r.P.push_back(p.P[a]);
+    r.u.push_back(p.u[a]);
+    r.h.push_back(p.h[a]);
+  }
+  const double t = sim.time();
+  r.errors = analysis::shock_tube_errors(p, exact, t, 0.5);
+  r.shock_position_exact = 0.5 + exact.right_shock_speed() * t;
+  r.contact_exact = 0.5 + exact.v_star() * t;
+  double h_max = 0.0;
+  for (double h : r.h) h_max = std::max(h_max, h);
+  r.shock_position = shock_position(p, 0.5 * (s.right.rho + exact.rho_star_right()), h_max);
+  // left-state gas: log u nearer to the exact left star value than to the right one
+  const eos::IdealGas gas{s.gamma};
+  const double uL = std::log(gas.internal_energy(exact.rho_star_left(), exact.p_star()));
+  const double uR = std::log(gas.internal_energy(exact.rho_star_right(), exact.p_star()));
+  std::size_t beyond = 0, left_state = 0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    if (p.x[a][0] <= r.contact_exact + 2.0 * p.h[a]) continue;
+    ++beyond;
+    const double lu = std::log(std::max(p.u[a], 1e-300));
+    if (std::abs(lu - uL) < std::abs(lu - uR)) ++left_state;
+  }
+  r.penetration = beyond ? static_cast<double>(left_state) / static_cast<double>(beyond) : 0.0;
+  r.steps = sim.steps();
+  r.updates = sim.particle_updates();
+  r.regularizations = sim.regularizations();
+  r.regularization_seconds = sim.phase_times().regularization;
+  r.particles = p.n_real;
+  r.wall_seconds = wall0_seconds;
+  return r;
+}
+
+}  // namespace detail
+
+using ShockRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<kernel::CubicSpline, 2>>;
+using RsphShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, ShockRegularizer, physics::ArtificialViscosity>;
+using SphShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity,
+                            physics::GradH<2>>;
+
+inline RsphShock make_rsph_shock(const StrongShockParams& s) {
+  s.validate();
+  const eos::IdealGas gas{s.gamma};
+  const double dx = 1.0 / s.nx;
+  ParticleSet<2, true> p;
+  detail::add_block<kernel::CubicSpline>(p, s.left, gas, 0.0, s.nx / 2, s.ny, dx, s.h_over_dx);
+  detail::add_block<kernel::CubicSpline>(p, s.right, gas, 0.5, s.nx - s.nx / 2, s.ny, dx, s.h_over_dx);
+  Box<2> box;
+  box.hi = Vec<2>(1.0, s.strip_width_rsph());
+  box.edge = {Edge::reflecting, Edge::periodic};
+  TimeStepParams ts;
+  ts.courant = s.courant;
+  return RsphShock(std::move(p), box, gas,
+                   ShockRegularizer(lattice::Square{dx}, schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
+                                    regularize::RemapParams{s.h_over_dx}),
+                   ts, physics::ArtificialViscosity{s.alpha, s.beta});
+}
+
+inline SphShock make_sph_shock(const StrongShockParams& s) {
+  s.validate();
+  const eos::IdealGas gas{s.gamma};
+  ParticleSet<2, true> p;
+  detail::add_block<kernel::CubicSpline>(p, s.left, gas, 0.0, s.sph_nx_left, s.sph_ny_left, 0.5 / s.sph_nx_left, s.eta);
+  detail::add_block<kernel::CubicSpline>(p, s.right, gas, 0.5, s.sph_nx_right, s.sph_ny_right, 0.5 / s.sph_nx_right, s.eta);
+  Box<2> box;
+  box.hi = Vec<2>(1.0, s.strip_width_sph());
+  box.edge = {Edge::reflecting, Edge::periodic};
+  TimeStepParams ts;
+  ts.courant = s.courant;
+  return SphShock(std::move(p), box, gas, regularize::None{}, ts, physics::ArtificialViscosity{s.alpha, s.beta},
+                  physics::GradH<2>{s.eta});
+}
+
+/// Runs either simulation to t_end; on_step(sim) after each step, on_end(sim) once at the end.
+template <class Sim, class OnStep, class OnEnd>
+ShockRun run_shock(Sim sim, const StrongShockParams& s, OnStep&& on_step, OnEnd&& on_end) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const double E0 = sim.totals().total_energy();
+  double particle_sum = 0.0;
+  sim.run_until(s.t_end, [&](const auto& sm) {
+    particle_sum += static_cast<double>(sm.particles().n_real);
+    on_step(sm);
+  });
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  on_end(sim);
+  ShockRun r = detail::finish(sim, s, wall);
+  r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
+  r.mean_particles = particle_sum / static_cast<double>(std::max<std::uint64_t>(sim.steps(), 1));
+  return r;
+}
+
+}  // namespace rsph::scenes
