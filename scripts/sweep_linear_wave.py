@@ -83,16 +83,17 @@ def main():
             s = fut.result()
             results.append((kind, setting, lam, s))
             print(f"{kind:9} {setting:18} lambda={lam:4}: gamma={s['gamma']:+.3e} phase={s['phase_error']:+.2e} "
-                  f"noise x{s['velocity_noise_growth']:.3g} amp x{s['amplitude_growth']:.3g} {s['wall_seconds']:.1f} s",
+                  f"noise x{s['velocity_noise_growth']:.3g} amp x{s['amplitude_growth']:.3g} {s['wall_seconds']:.1f} s "
+                  f"(cpu {s['cpu_seconds']:.1f} s)",
                   flush=True)
     results.sort(key=lambda t: (t[0], t[1], t[2]))
     with open(os.path.join(args.out, "sweep.csv"), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["kind", "setting", "wavelength_cells", "gamma", "phase_error", "amplitude_growth",
-                    "velocity_noise_growth", "wall_seconds", "steps", "particles"])
+                    "velocity_noise_growth", "wall_seconds", "cpu_seconds", "steps", "particles"])
         for kind, setting, lam, s in results:
             w.writerow([kind, setting, lam, s["gamma"], s["phase_error"], s["amplitude_growth"],
-                        s["velocity_noise_growth"], s["wall_seconds"], s["steps"], s["particles"]])
+                        s["velocity_noise_growth"], s["wall_seconds"], s["cpu_seconds"], s["steps"], s["particles"]])
 
     fig3 = [r for r in results if r[0] != "stability"]
     if fig3:
@@ -109,11 +110,11 @@ def main():
         ax.legend(fontsize=7, ncol=2)
         for kind, marker in [("rsph", "o"), ("sph", "s")]:
             pts = [r for r in fig3 if r[0] == kind]
-            ax2.scatter([r[3]["wall_seconds"] for r in pts], [abs(r[3]["gamma"]) for r in pts], marker=marker,
+            ax2.scatter([r[3]["cpu_seconds"] for r in pts], [abs(r[3]["gamma"]) for r in pts], marker=marker,
                         label=kind.upper())
         ax2.set_xscale("log")
         ax2.set_yscale("log")
-        ax2.set_xlabel("wall seconds (one core)")
+        ax2.set_xlabel("CPU seconds (one thread)")
         ax2.set_ylabel(r"$|\gamma|$ (error: any damping or growth)")
         ax2.set_title("accuracy against cost")
         ax2.legend()

@@ -63,7 +63,7 @@ int main(int argc, char** argv) {
     summary.set("gamma", res.gamma).set("phase_error", res.phase_error).set("amplitude_growth", res.amplitude_growth);
     summary.set("velocity_noise_initial", res.noise_initial).set("velocity_noise_final", res.noise_final);
     summary.set("velocity_noise_growth", res.noise_initial > 0 ? res.noise_final / res.noise_initial : 0.0);
-    summary.set("wall_seconds", wall).set("steps", res.steps);
+    summary.set("wall_seconds", wall).set("cpu_seconds", ex::cpu_seconds()).set("steps", res.steps);
     summary.set("particle_updates_per_second", static_cast<double>(res.updates) / wall);
     summary.set("regularizations", res.regularizations).set("regularization_seconds", res.regularization_seconds);
     summary.set("kinetic_energy_dissipated", res.dissipated);

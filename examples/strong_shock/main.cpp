@@ -32,7 +32,7 @@ int main(int argc, char** argv) {
         "sph-right-rows", ex::po::value(&s.sph_ny_right)->default_value(4), "SPH: rows, right half")(
         "eta", ex::po::value(&s.eta)->default_value(1.2), "SPH: h = eta (m / rho)^(1/2)")(
         "t-end", ex::po::value(&s.t_end)->default_value(2.5e-6), "end time")(
-        "courant", ex::po::value(&s.courant)->default_value(0.3), "Courant factor");
+        "courant", ex::po::value(&s.courant)->default_value(0.2), "Courant factor");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-strong-shock: (rho, v, P) = (1, 0, 1e10) | (0.125, 0, 0.1), gamma = 1.4, t = 2.5e-6.\n"

@@ -1,0 +1,179 @@
+#pragma once
+// §3.3 of the paper: Kelvin-Helmholtz instability at density ratio 10 (Agertz et al. 2007 setup):
+// (-0.5, 0.5) x (0, 0.5), periodic in x, reflecting walls at y = 0 and 0.5; rho = 10 above y = 0.25 and
+// 1 below; P = 2.5; gamma = 5/3; v_x = 0.5 below, -0.5 above; v_y = A sin(-k (x + 0.5)) within 0.025 of
+// the interface, A = 0.025, k = 12 pi; no artificial viscosity.
+#include "rsph/rsph.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+namespace rsph::scenes {
+
+struct KelvinHelmholtzParams {
+  int cells = 256;            ///< 1 / Delta (RSPH lattice; SPH's low-density spacing)
+  double h_over_dx = 1.2;
+  std::uint64_t reg_steps = 48;
+  double alpha_u = 0.0;       ///< artificial conductivity (0: off)
+  double chi = 10.0;          ///< density ratio
+  double P = 2.5, gamma = 5.0 / 3.0, dv = 1.0;
+  double A = 0.025, k = 12.0 * std::numbers::pi, layer = 0.025;
+  double t_end = 0.0;         ///< 0: tau_KH
+  double courant = 0.3;
+
+  void validate() const {
+    require(cells >= 16 && cells % 2 == 0, "Kelvin-Helmholtz: need an even number of cells >= 16 (got " + std::to_string(cells) + ")");
+    require(h_over_dx > 0.0, "Kelvin-Helmholtz: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
+    require(chi >= 1.0, "Kelvin-Helmholtz: the density ratio must be >= 1");
+    require(reg_steps >= 1, "Kelvin-Helmholtz: regularize at least every step");
+    require(alpha_u >= 0.0, "Kelvin-Helmholtz: alpha_u must be non-negative");
+  }
+  /// 2 pi over the incompressible growth rate k dv sqrt(chi) / (1 + chi): 0.58 for the paper's setup.
+  double tau_KH() const { return 2.0 * std::numbers::pi / (k * dv * std::sqrt(chi) / (1.0 + chi)); }
+  double end_time() const { return t_end > 0.0 ? t_end : tau_KH(); }
+  Box<2> box() const {
+    Box<2> b;
+    b.lo = Vec<2>(-0.5, 0.0);
+    b.hi = Vec<2>(0.5, 0.5);
+    b.edge = {Edge::periodic, Edge::reflecting};
+    return b;
+  }
+  Vec<2> velocity(const Vec<2>& x) const {
+    const double vy = std::abs(x[1] - 0.25) < layer ? A * std::sin(-k * (x[0] + 0.5)) : 0.0;
+    return Vec<2>(x[1] < 0.25 ? 0.5 * dv : -0.5 * dv, vy);
+  }
+};
+
+/// The seeded mode's amplitude (McNally, Lyra & Passy 2012 eqs. 10-13, one interface at y = 0.25):
+/// M = 2 sqrt((s/d)^2 + (c/d)^2), s, c = sum V v_y {sin, cos}(k x) e^(-k |y - 0.25|), d = sum V e^(-k |y - 0.25|).
+template <class P>
+double mode_amplitude(const P& p, double k) {
+  double s = 0.0, c = 0.0, d = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const double V = p.m[a] / p.rho[a];
+    const double w = V * std::exp(-k * std::abs(p.x[a][1] - 0.25));
+    s += w * p.v[a][1] * std::sin(k * p.x[a][0]);
+    c += w * p.v[a][1] * std::cos(k * p.x[a][0]);
+    d += w;
+  }
+  return 2.0 * std::sqrt((s / d) * (s / d) + (c / d) * (c / d));
+}
+
+/// RSPH: a square lattice; masses give rho through the lattice sum.
+inline ParticleSet<2, true> kh_lattice(const KelvinHelmholtzParams& s, double h_over_dx) {
+  s.validate();
+  const double dx = 1.0 / s.cells;
+  const eos::IdealGas gas{s.gamma};
+  const double bias = kernel::lattice_sum<kernel::CubicSpline, 2>(h_over_dx);
+  ParticleSet<2, true> p;
+  for (int j = 0; j < s.cells / 2; ++j)
+    for (int i = 0; i < s.cells; ++i) {
+      const Vec<2> x(-0.5 + (i + 0.5) * dx, (j + 0.5) * dx);
+      const double rho = x[1] > 0.25 ? s.chi : 1.0;
+      p.add(rho * dx * dx / bias, x, s.velocity(x), h_over_dx * dx, gas.internal_energy(rho, s.P));
+    }
+  return p;
+}
+
+/// Plain SPH: equal masses, spacing Delta below and Delta / sqrt(chi) above (rounded to tile the box).
+inline ParticleSet<2, true> kh_equal_mass(const KelvinHelmholtzParams& s) {
+  s.validate();
+  const eos::IdealGas gas{s.gamma};
+  ParticleSet<2, true> p;
+  auto block = [&](double rho, double y0, double y1, int nx) {
+    const double dx = 1.0 / nx;
+    const int ny = std::max(1, static_cast<int>(std::lround((y1 - y0) / dx)));
+    const double dy = (y1 - y0) / ny;
+    const double bias = kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const Vec<2> x(-0.5 + (i + 0.5) * dx, y0 + (j + 0.5) * dy);
+        p.add(rho * dx * dy / bias, x, s.velocity(x), s.h_over_dx * std::sqrt(dx * dy), gas.internal_energy(rho, s.P));
+      }
+  };
+  block(1.0, 0.0, 0.25, s.cells);
+  block(s.chi, 0.25, 0.5, static_cast<int>(std::lround(s.cells * std::sqrt(s.chi))));
+  return p;
+}
+
+struct KhRun {
+  std::vector<double> t, amplitude;
+  double seed = 0.0, amplitude_final = 0.0, growth_rate = 0.0;
+  double energy_error = 0.0, wall_seconds = 0.0, regularization_seconds = 0.0;
+  std::uint64_t steps = 0, updates = 0, regularizations = 0, particles = 0;
+};
+
+/// Least-squares slope of ln M over [t0, t1]: the growth rate of the linear phase.
+inline double fitted_growth_rate(const std::vector<double>& t, const std::vector<double>& M, double t0, double t1) {
+  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    if (t[i] < t0 || t[i] > t1 || !(M[i] > 0.0)) continue;
+    const double y = std::log(M[i]);
+    n += 1;
+    sx += t[i];
+    sy += y;
+    sxx += t[i] * t[i];
+    sxy += t[i] * y;
+  }
+  return n >= 2 ? (n * sxy - sx * sy) / (n * sxx - sx * sx) : 0.0;
+}
+
+template <class Sim, class OnStep, class OnEnd>
+KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end) {
+  KhRun r;
+  const auto t0 = std::chrono::steady_clock::now();
+  const double E0 = sim.totals().total_energy();
+  r.seed = mode_amplitude(sim.particles(), s.k);
+  r.t.push_back(0.0);
+  r.amplitude.push_back(r.seed);
+  sim.run_until(s.end_time(), [&](const auto& sm) {
+    r.t.push_back(sm.time());
+    r.amplitude.push_back(mode_amplitude(sm.particles(), s.k));
+    on_step(sm);
+  });
+  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  on_end(sim);
+  r.amplitude_final = r.amplitude.back();
+  r.growth_rate = fitted_growth_rate(r.t, r.amplitude, 0.1 * s.tau_KH(), 0.5 * s.tau_KH());
+  r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
+  r.steps = sim.steps();
+  r.updates = sim.particle_updates();
+  r.regularizations = sim.regularizations();
+  r.regularization_seconds = sim.phase_times().regularization;
+  r.particles = sim.particles().n_real;
+  return r;
+}
+
+/// Runs one of the four variants: RSPH or SPH, with or without conductivity.
+template <class OnStep, class OnEnd>
+KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end) {
+  using K = kernel::CubicSpline;
+  using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps>;
+  TimeStepParams ts;
+  ts.courant = s.courant;
+  const eos::IdealGas gas{s.gamma};
+  auto reg = [&] { return Reg(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps}, regularize::RemapParams{s.h_over_dx}); };
+  if (rsph && s.alpha_u > 0) {
+    Simulation<2, K, eos::IdealGas, Reg, physics::ArtificialConductivity> sim(kh_lattice(s, s.h_over_dx), s.box(), gas, reg(), ts,
+                                                                              physics::ArtificialConductivity{s.alpha_u});
+    return run_kh(sim, s, on_step, on_end);
+  }
+  if (rsph) {
+    Simulation<2, K, eos::IdealGas, Reg> sim(kh_lattice(s, s.h_over_dx), s.box(), gas, reg(), ts);
+    return run_kh(sim, s, on_step, on_end);
+  }
+  if (s.alpha_u > 0) {
+    Simulation<2, K, eos::IdealGas, regularize::None, physics::GradH<2>, physics::ArtificialConductivity> sim(
+        kh_equal_mass(s), s.box(), gas, regularize::None{}, ts, physics::GradH<2>{s.h_over_dx},
+        physics::ArtificialConductivity{s.alpha_u});
+    return run_kh(sim, s, on_step, on_end);
+  }
+  Simulation<2, K, eos::IdealGas, regularize::None, physics::GradH<2>> sim(kh_equal_mass(s), s.box(), gas, regularize::None{}, ts,
+                                                                          physics::GradH<2>{s.h_over_dx});
+  return run_kh(sim, s, on_step, on_end);
+}
+
+}  // namespace rsph::scenes

@@ -1,0 +1,63 @@
+#!/usr/bin/python3
+"""Density maps at t = tau_KH (the analogue of Fig. 5) and mode amplitude against time for
+rsph-kelvin-helmholtz output folders.
+
+Usage: plot_kelvin_helmholtz.py DIR [DIR ...] --png FILE
+"""
+import argparse
+import csv
+import json
+import math
+import os
+
+import h5py
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("dirs", nargs="+")
+    ap.add_argument("--png", required=True)
+    args = ap.parse_args()
+    n = len(args.dirs)
+    fig = plt.figure(figsize=(6.5 * min(n, 2), 3.4 * ((n + 1) // 2) + 3.6))
+    grid = fig.add_gridspec((n + 1) // 2 + 1, 2)
+    amp_ax = fig.add_subplot(grid[-1, :])
+    for i, d in enumerate(args.dirs):
+        with open(os.path.join(d, "summary.json")) as f:
+            s = json.load(f)
+        label = f"{s['method'].upper()}, alpha_u = {s['alpha_u']:g}"
+        ax = fig.add_subplot(grid[i // 2, i % 2])
+        with h5py.File(os.path.join(d, "snap_00001.h5"), "r") as h:
+            x = h["x"][:]
+            rho = h["rho"][:]
+            t = h.attrs["time"]
+        size = 60000.0 / len(rho)
+        sc = ax.scatter(x[:, 0], x[:, 1], c=rho, s=size, cmap="viridis", vmin=1, vmax=10, linewidths=0)
+        ax.set_xlim(-0.5, 0.5)
+        ax.set_ylim(0, 0.5)
+        ax.set_aspect("equal")
+        ax.set_title(f"{label}: t = {t:.2f}, {s['particles']} particles, {s['wall_seconds']:.0f} s", fontsize=9)
+        fig.colorbar(sc, ax=ax, fraction=0.025)
+        with open(os.path.join(d, "amplitude.csv")) as f:
+            rows = list(csv.DictReader(f))
+        amp_ax.plot([float(r["time"]) for r in rows], [float(r["amplitude"]) for r in rows], label=label)
+        tau = s["tau_KH"]
+    sigma = 2 * math.pi / tau
+    t_lin = [0.05 * tau, 0.6 * tau]
+    amp_ax.plot(t_lin, [0.01 * math.exp(sigma * (tt - t_lin[0])) for tt in t_lin], "k:", label="linear theory slope")
+    amp_ax.set_yscale("log")
+    amp_ax.set_ylim(3e-3, 0.5)
+    amp_ax.set_xlabel("t")
+    amp_ax.set_ylabel("mode amplitude (McNally et al. 2012)")
+    amp_ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(args.png, dpi=100)
+    print(f"wrote {args.png}")
+
+
+if __name__ == "__main__":
+    main()
