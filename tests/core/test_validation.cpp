@@ -54,3 +54,33 @@ TEST_CASE("mirror ghosts at reflecting walls keep a uniform lattice uniform", "[
   for (int s = 0; s < 20; ++s) sim.step();
   for (std::size_t a = 0; a < sim.particles().n_real; ++a) CHECK(std::abs(sim.particles().v[a][0]) < 1e-12);
 }
+
+TEST_CASE("frozen particles follow their prescribed motion and still push their neighbours", "[boundary]") {
+  // a 1D column whose first 5 particles are a piston moving at 0.1
+  ParticleSet<1, true> p;
+  const int n = 40;
+  const double dx = 1.0 / n;
+  for (int i = 0; i < n; ++i) p.add(dx, Vec<1>((i + 0.5) * dx), Vec<1>(0.0), 1.2 * dx, 1.0);
+  for (int i = 0; i < 5; ++i) p.frozen[static_cast<std::size_t>(i)] = 1;
+  std::vector<double> x0(p.x.size());
+  for (std::size_t a = 0; a < p.x.size(); ++a) x0[a] = p.x[a][0];
+  auto run = [&](double speed) {
+    auto piston = [x0, speed](std::size_t i, double t, Vec<1>& x, Vec<1>& v) {
+      x[0] = x0[i] + speed * t;
+      v[0] = speed;
+    };
+    Box<1> box;  // open
+    Simulation<1, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity,
+               boundary::PrescribedMotion<decltype(piston)>>
+        sim(p, box, eos::IdealGas{1.4}, {}, {}, physics::ArtificialViscosity{}, boundary::PrescribedMotion(piston));
+    sim.run_until(0.2);
+    const auto& q = sim.particles();
+    for (std::size_t i = 0; i < 5; ++i) {
+      CHECK(q.x[i][0] == Approx(x0[i] + speed * sim.time()).epsilon(1e-12));
+      CHECK(q.v[i][0] == speed);
+    }
+    return q.v[5][0];
+  };
+  const double still = run(0.0), pushed = run(0.3);
+  CHECK(pushed > still + 0.05);  // the gas ahead of a moving piston is pushed
+}
