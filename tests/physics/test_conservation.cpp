@@ -113,3 +113,24 @@ TEST_CASE("artificial conductivity: heat flows from hot to cold and the energy s
   CHECK(physics::ArtificialConductivity{1.0}.pair(pr).du_dt == Approx(-du_a));
   CHECK(du_a < 0.0);
 }
+
+TEST_CASE("point-mass gravity: Kepler's acceleration, softened", "[physics]") {
+  const physics::PointMass<2> star{2.0, Vec<2>(1.0, 0.0), 0.0};
+  const Vec<2> g = star.acceleration(Vec<2>(1.0, 2.0), 0.0);
+  CHECK(g[0] == Approx(0.0).margin(1e-15));
+  CHECK(g[1] == Approx(-2.0 / 4.0));
+  const physics::PointMass<2> soft{1.0, Vec<2>::Zero(), 0.5};
+  CHECK(soft.acceleration(Vec<2>(0.5, 0.0), 0.0)[0] == Approx(-0.5 / std::pow(0.5, 1.5)));
+  CHECK(soft.potential(Vec<2>(0.0, 0.0)) == Approx(-2.0));
+  // a particle on a circular orbit stays on it: the body force enters the integrator
+  ParticleSet<2, false> p;
+  p.add(1e-6, Vec<2>(1.0, 0.0), Vec<2>(0.0, 1.0), 0.01);
+  Box<2> open;
+  TimeStepParams ts;
+  ts.dt_max = 1e-3;
+  Simulation<2, kernel::CubicSpline, eos::Pressureless, regularize::None, physics::PointMass<2>> sim(
+      p, open, eos::Pressureless{}, {}, ts, physics::PointMass<2>{});
+  sim.run_until(2.0 * 3.141592653589793);
+  CHECK(sim.particles().x[0].norm() == Approx(1.0).epsilon(1e-5));
+  CHECK((sim.particles().x[0] - Vec<2>(1.0, 0.0)).norm() < 1e-4);
+}
