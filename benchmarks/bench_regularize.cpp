@@ -30,8 +30,8 @@ ParticleSet<2, true> make_set(std::int64_t n_particles, int layout) {
     for (int i = 0; i < n; ++i) {
       double x = (i + 0.5) * dx + shift + (layout == jittered ? u(rng) * dx : 0.0);
       x -= std::floor(x);
-      p.add(dx * dx, Vec<2>(x, std::clamp(y + (layout == jittered ? u(rng) * dx : 0.0), 0.0, 1.0)), Vec<2>(u(rng), u(rng)),
-            1.2 * dx, 1.0);
+      p.add(dx * dx, Vec<2>(x, std::clamp(y + (layout == jittered ? u(rng) * dx : 0.0), 0.0, 1.0)),
+            Vec<2>(u(rng), u(rng)), 1.2 * dx, 1.0);
     }
   }
   return p;
@@ -75,7 +75,8 @@ void BM_remap(benchmark::State& state) {
     state.PauseTiming();
     auto p = p0;
     state.ResumeTiming();
-    const auto stats = regularize::remap_onto_lattice(p, domain(), lattice::Square{dx}, builder, regularize::RemapParams{});
+    const auto stats =
+        regularize::remap_onto_lattice(p, domain(), lattice::Square{dx}, builder, regularize::RemapParams{});
     benchmark::DoNotOptimize(stats.n_after);
   }
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p0.n_real));

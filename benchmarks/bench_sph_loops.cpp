@@ -26,7 +26,8 @@ std::unique_ptr<Sim> make_lattice(std::int64_t n_particles, double h_over_dx) {
   p.reserve(static_cast<std::size_t>(n) * n);
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
-      p.add(dx * dx, Vec<2>((i + 0.5 + u(rng)) * dx, (j + 0.5 + u(rng)) * dx), Vec<2>(u(rng), u(rng)), h_over_dx * dx, 1.0);
+      p.add(dx * dx, Vec<2>((i + 0.5 + u(rng)) * dx, (j + 0.5 + u(rng)) * dx), Vec<2>(u(rng), u(rng)), h_over_dx * dx,
+            1.0);
   Box<2> box;
   box.edge = {Edge::periodic, Edge::periodic};
   return std::make_unique<Sim>(std::move(p), box, eos::IdealGas{1.4}, regularize::None{}, TimeStepParams{},
@@ -48,8 +49,10 @@ void BM_loop(benchmark::State& state) {
   const int threads = threads_for(state);
   auto sim = make_lattice(state.range(0), h_over_dx);
   for (auto _ : state) {
-    if constexpr (Forces) sim->compute_forces();
-    else sim->compute_density();
+    if constexpr (Forces)
+      sim->compute_forces();
+    else
+      sim->compute_density();
     benchmark::DoNotOptimize(sim->particles().rho.data());
   }
   const auto n = static_cast<std::int64_t>(sim->particles().n_real);

@@ -3,12 +3,12 @@
 #include "rsph/core/errors.hpp"
 #include "rsph/io/atomic_file.hpp"
 
-#include <boost/program_options.hpp>
 #include <fmt/format.h>
+#include <boost/program_options.hpp>
 
 #include <chrono>
-#include <ctime>
 #include <cstdio>
+#include <ctime>
 #include <exception>
 #include <filesystem>
 #include <functional>
@@ -31,11 +31,11 @@ struct CommonOptions {
 };
 
 inline void add_common_options(po::options_description& desc, CommonOptions& common) {
-  desc.add_options()("help,h", "show this help and exit")(
-      "out", po::value(&common.out)->default_value(common.out), "output folder (created if missing)")(
+  desc.add_options()("help,h", "show this help and exit")("out", po::value(&common.out)->default_value(common.out),
+                                                          "output folder (created if missing)")(
       "preset", po::value(&common.preset)->default_value(common.preset),
-      "quick: a small run in seconds; paper: the full setup")(
-      "threads", po::value(&common.threads)->default_value(0), "OpenMP threads (0: all cores)")(
+      "quick: a small run in seconds; paper: the full setup")("threads", po::value(&common.threads)->default_value(0),
+                                                              "OpenMP threads (0: all cores)")(
       "quiet", po::bool_switch(&common.quiet), "no progress line");
 }
 
@@ -44,7 +44,11 @@ inline bool parse(int argc, char** argv, const po::options_description& desc, po
                   const std::string& usage) {
   po::store(po::parse_command_line(argc, argv, desc), vm);
   if (vm.count("help")) {
-    fmt::print("{}\n\n{}", usage, [&] { std::ostringstream s; s << desc; return s.str(); }());
+    fmt::print("{}\n\n{}", usage, [&] {
+      std::ostringstream s;
+      s << desc;
+      return s.str();
+    }());
     return false;
   }
   po::notify(vm);

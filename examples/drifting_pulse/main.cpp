@@ -48,9 +48,10 @@ int main(int argc, char** argv) {
         "contrast", ex::po::value(&base.contrast)->default_value(2.0), "pulse density over the background")(
         "h-over-dx", ex::po::value(&base.h_over_dx)->default_value(1.4), "h / Delta");
     ex::po::variables_map vm;
-    if (!ex::parse(argc, argv, desc, vm,
-                   "rsph-drifting-pulse: a square pulse drifting through a periodic 1D lattice, regularized every T_reg.\n"
-                   "Usage: rsph-drifting-pulse [--shifts 0.01,0.1,0.5,1.0] [--counts 0,100,...] [--out DIR]"))
+    if (!ex::parse(
+            argc, argv, desc, vm,
+            "rsph-drifting-pulse: a square pulse drifting through a periodic 1D lattice, regularized every T_reg.\n"
+            "Usage: rsph-drifting-pulse [--shifts 0.01,0.1,0.5,1.0] [--counts 0,100,...] [--out DIR]"))
       return 0;
     if (common.preset == "quick") {
       if (vm["counts"].defaulted()) counts_text = "0,10,20,30,40";

@@ -10,16 +10,17 @@
 namespace rsph::scenes {
 
 struct DriftingPulseParams {
-  int cells = 128;           ///< lattice sites on the periodic line
-  int pulse_width = 4;       ///< pulse width in spacings (the paper: 4 Delta)
-  double contrast = 2.0;     ///< density inside the pulse over the background
-  double h_over_dx = 1.4;    ///< the paper: h = 1.4 Delta
-  double shift = 0.5;        ///< T_reg v_d / Delta
+  int cells = 128;         ///< lattice sites on the periodic line
+  int pulse_width = 4;     ///< pulse width in spacings (the paper: 4 Delta)
+  double contrast = 2.0;   ///< density inside the pulse over the background
+  double h_over_dx = 1.4;  ///< the paper: h = 1.4 Delta
+  double shift = 0.5;      ///< T_reg v_d / Delta
   double v_drift = 1.0;
 
   void validate() const {
     require(cells >= 8, "drifting pulse: need at least 8 lattice cells (got " + std::to_string(cells) + ")");
-    require(pulse_width >= 1 && pulse_width < cells / 2, "drifting pulse: the pulse must be narrower than half the line");
+    require(pulse_width >= 1 && pulse_width < cells / 2,
+            "drifting pulse: the pulse must be narrower than half the line");
     require(h_over_dx > 0.0, "drifting pulse: h/dx must be positive (got " + std::to_string(h_over_dx) + ")");
     require(shift > 0.0, "drifting pulse: T_reg v_d / Delta must be positive");
     require(v_drift > 0.0, "drifting pulse: the drift speed must be positive");
@@ -47,10 +48,9 @@ DriftingPulse<Kernel> make_drifting_pulse(const DriftingPulseParams& s) {
   box.edge = {Edge::periodic};
   TimeStepParams ts;
   ts.dt_max = s.T_reg();  // force-free: one step per regularization
-  return DriftingPulse<Kernel>(std::move(p), box, eos::Pressureless{},
-                               DriftRegularizer(lattice::Uniform1D{dx}, schedule::EveryT{s.T_reg()},
-                                                regularize::RemapParams{s.h_over_dx}),
-                               ts);
+  return DriftingPulse<Kernel>(
+      std::move(p), box, eos::Pressureless{},
+      DriftRegularizer(lattice::Uniform1D{dx}, schedule::EveryT{s.T_reg()}, regularize::RemapParams{s.h_over_dx}), ts);
 }
 
 /// Positions in the frame moving with the drift, wrapped so the pulse sits where it started.

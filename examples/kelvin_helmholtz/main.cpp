@@ -48,7 +48,9 @@ int main(int argc, char** argv) {
       }
       if (!common.quiet) progress.update(sim.time(), sim.steps());
     };
-    auto on_end = [&](const auto& sim) { io::write_snapshot(dir / io::snapshot_name(1), sim.particles(), sim.time(), sim.steps()); };
+    auto on_end = [&](const auto& sim) {
+      io::write_snapshot(dir / io::snapshot_name(1), sim.particles(), sim.time(), sim.steps());
+    };
     {
       // the initial state, for the record
       const auto p0 = method == "rsph" ? scenes::kh_lattice(s, s.h_over_dx) : scenes::kh_equal_mass(s);
@@ -69,10 +71,12 @@ int main(int argc, char** argv) {
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
     summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
     summary.write(dir / "summary.json");
-    fmt::print("rsph-kelvin-helmholtz {} alpha_u = {}: {} particles, {} steps, {:.1f} s; amplitude {:.4f} -> {:.4f} (x{:.1f}), "
-               "growth rate {:.2f} (linear theory {:.2f}); energy error {:.1e}\n",
-               method, s.alpha_u, r.particles, r.steps, r.wall_seconds, r.seed, r.amplitude_final, r.amplitude_final / r.seed,
-               r.growth_rate, 2.0 * std::numbers::pi / s.tau_KH(), r.energy_error);
+    fmt::print(
+        "rsph-kelvin-helmholtz {} alpha_u = {}: {} particles, {} steps, {:.1f} s; amplitude {:.4f} -> {:.4f} "
+        "(x{:.1f}), "
+        "growth rate {:.2f} (linear theory {:.2f}); energy error {:.1e}\n",
+        method, s.alpha_u, r.particles, r.steps, r.wall_seconds, r.seed, r.amplitude_final, r.amplitude_final / r.seed,
+        r.growth_rate, 2.0 * std::numbers::pi / s.tau_KH(), r.energy_error);
     return 0;
   });
 }

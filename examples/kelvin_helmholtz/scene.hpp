@@ -14,18 +14,19 @@
 namespace rsph::scenes {
 
 struct KelvinHelmholtzParams {
-  int cells = 256;            ///< 1 / Delta (RSPH lattice; SPH's low-density spacing)
+  int cells = 256;  ///< 1 / Delta (RSPH lattice; SPH's low-density spacing)
   double h_over_dx = 1.2;
   std::uint64_t reg_steps = 48;
-  double alpha_u = 0.0;       ///< artificial conductivity (0: off)
-  double chi = 10.0;          ///< density ratio
+  double alpha_u = 0.0;  ///< artificial conductivity (0: off)
+  double chi = 10.0;     ///< density ratio
   double P = 2.5, gamma = 5.0 / 3.0, dv = 1.0;
   double A = 0.025, k = 12.0 * std::numbers::pi, layer = 0.025;
-  double t_end = 0.0;         ///< 0: tau_KH
+  double t_end = 0.0;  ///< 0: tau_KH
   double courant = 0.3;
 
   void validate() const {
-    require(cells >= 16 && cells % 2 == 0, "Kelvin-Helmholtz: need an even number of cells >= 16 (got " + std::to_string(cells) + ")");
+    require(cells >= 16 && cells % 2 == 0,
+            "Kelvin-Helmholtz: need an even number of cells >= 16 (got " + std::to_string(cells) + ")");
     require(h_over_dx > 0.0, "Kelvin-Helmholtz: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
     require(chi >= 1.0, "Kelvin-Helmholtz: the density ratio must be >= 1");
     require(reg_steps >= 1, "Kelvin-Helmholtz: regularize at least every step");
@@ -155,10 +156,13 @@ KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& o
   TimeStepParams ts;
   ts.courant = s.courant;
   const eos::IdealGas gas{s.gamma};
-  auto reg = [&] { return Reg(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps}, regularize::RemapParams{s.h_over_dx}); };
+  auto reg = [&] {
+    return Reg(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
+               regularize::RemapParams{s.h_over_dx});
+  };
   if (rsph && s.alpha_u > 0) {
-    Simulation<2, K, eos::IdealGas, Reg, physics::ArtificialConductivity> sim(kh_lattice(s, s.h_over_dx), s.box(), gas, reg(), ts,
-                                                                              physics::ArtificialConductivity{s.alpha_u});
+    Simulation<2, K, eos::IdealGas, Reg, physics::ArtificialConductivity> sim(
+        kh_lattice(s, s.h_over_dx), s.box(), gas, reg(), ts, physics::ArtificialConductivity{s.alpha_u});
     return run_kh(sim, s, on_step, on_end);
   }
   if (rsph) {
@@ -171,8 +175,8 @@ KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& o
         physics::ArtificialConductivity{s.alpha_u});
     return run_kh(sim, s, on_step, on_end);
   }
-  Simulation<2, K, eos::IdealGas, regularize::None, physics::GradH<2>> sim(kh_equal_mass(s), s.box(), gas, regularize::None{}, ts,
-                                                                          physics::GradH<2>{s.h_over_dx});
+  Simulation<2, K, eos::IdealGas, regularize::None, physics::GradH<2>> sim(
+      kh_equal_mass(s), s.box(), gas, regularize::None{}, ts, physics::GradH<2>{s.h_over_dx});
   return run_kh(sim, s, on_step, on_end);
 }
 

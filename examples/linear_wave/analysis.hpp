@@ -15,12 +15,14 @@ namespace rsph::analysis {
 /// S_k / S_0 = e^(-gamma omega k P_w) = e^(-2 pi gamma k) (the peaks of every period sit at the same phase),
 /// and sum_{k=1}^{N-1} k = N (N - 1) / 2, so this returns gamma exactly. As printed, with Delta t the time
 /// step, eq. (11) would not.
-inline double damping_rate(const std::vector<double>& t, const std::vector<double>& signal, double period, int periods) {
+inline double damping_rate(const std::vector<double>& t, const std::vector<double>& signal, double period,
+                           int periods) {
   require(periods >= 2, "damping rate: need at least two periods");
   std::vector<double> S(static_cast<std::size_t>(periods), 0.0);
   for (std::size_t i = 0; i < t.size(); ++i) {
     const auto k = static_cast<long>(std::floor(t[i] / period * (1.0 + 1e-12)));
-    if (k >= 0 && k < periods) S[static_cast<std::size_t>(k)] = std::max(S[static_cast<std::size_t>(k)], std::abs(signal[i]));
+    if (k >= 0 && k < periods)
+      S[static_cast<std::size_t>(k)] = std::max(S[static_cast<std::size_t>(k)], std::abs(signal[i]));
   }
   require(S[0] > 0.0, "damping rate: the signal is zero over the first period");
   double sum = 0.0;

@@ -20,11 +20,13 @@ int main(int argc, char** argv) {
     ex::add_common_options(desc, common);
     desc.add_options()("wavelength", ex::po::value(&s.wavelength_cells)->default_value(24), "lambda / Delta (even)")(
         "r", ex::po::value(&s.r)->default_value(4.25), "RSPH: regularization period over wave period (0: plain SPH)")(
-        "alpha", ex::po::value(&s.alpha)->default_value(0.0), "plain SPH (r = 0): artificial viscosity alpha; beta = 2 alpha")(
+        "alpha", ex::po::value(&s.alpha)->default_value(0.0),
+        "plain SPH (r = 0): artificial viscosity alpha; beta = 2 alpha")(
         "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(1.2), "h / Delta")(
         "periods", ex::po::value(&s.periods)->default_value(100), "wave periods to run (N of eq. 11)")(
         "amplitude", ex::po::value(&s.amplitude)->default_value(1e-3), "density amplitude delta rho / rho")(
-        "jitter", ex::po::value(&s.jitter)->default_value(0.0), "random initial displacement in Delta (seeds instabilities)")(
+        "jitter", ex::po::value(&s.jitter)->default_value(0.0),
+        "random initial displacement in Delta (seeds instabilities)")(
         "courant", ex::po::value(&s.courant)->default_value(0.3), "Courant factor")(
         "kernel", ex::po::value(&kernel_name)->default_value("quintic"), "quintic (the paper's) or cubic");
     ex::po::variables_map vm;
@@ -47,9 +49,12 @@ int main(int argc, char** argv) {
       if (!common.quiet) progress.update(sim.time(), sim.steps());
     };
     scenes::LinearWaveResult res;
-    if (kernel_name == "quintic") res = scenes::run_linear_wave<kernel::QuinticSpline>(s, on_step);
-    else if (kernel_name == "cubic") res = scenes::run_linear_wave<kernel::CubicSpline>(s, on_step);
-    else throw InputError("unknown kernel '" + kernel_name + "' (quintic, cubic)");
+    if (kernel_name == "quintic")
+      res = scenes::run_linear_wave<kernel::QuinticSpline>(s, on_step);
+    else if (kernel_name == "cubic")
+      res = scenes::run_linear_wave<kernel::CubicSpline>(s, on_step);
+    else
+      throw InputError("unknown kernel '" + kernel_name + "' (quintic, cubic)");
     progress.finish();
     const double wall = ex::seconds_since(wall0);
     io::CsvWriter csv(dir / "sensor.csv", {"time", "delta_rho"});
@@ -68,10 +73,12 @@ int main(int argc, char** argv) {
     summary.set("regularizations", res.regularizations).set("regularization_seconds", res.regularization_seconds);
     summary.set("kinetic_energy_dissipated", res.dissipated);
     summary.write(dir / "summary.json");
-    fmt::print("rsph-linear-wave {} lambda = {} Delta, {}: gamma = {:.3e}, phase error = {:.2e}, amplitude x{:.4f}, "
-               "transverse noise {:.1e} -> {:.1e}; {} steps, {:.1f} s\n",
-               s.r > 0 ? "RSPH" : "SPH", s.wavelength_cells, s.r > 0 ? fmt::format("r = {}", s.r) : fmt::format("alpha = {}", s.alpha),
-               res.gamma, res.phase_error, res.amplitude_growth, res.noise_initial, res.noise_final, res.steps, wall);
+    fmt::print(
+        "rsph-linear-wave {} lambda = {} Delta, {}: gamma = {:.3e}, phase error = {:.2e}, amplitude x{:.4f}, "
+        "transverse noise {:.1e} -> {:.1e}; {} steps, {:.1f} s\n",
+        s.r > 0 ? "RSPH" : "SPH", s.wavelength_cells,
+        s.r > 0 ? fmt::format("r = {}", s.r) : fmt::format("alpha = {}", s.alpha), res.gamma, res.phase_error,
+        res.amplitude_growth, res.noise_initial, res.noise_final, res.steps, wall);
     return 0;
   });
 }

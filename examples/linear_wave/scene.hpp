@@ -16,15 +16,16 @@ struct LinearWaveParams {
   int wavelength_cells = 24;  ///< lambda / Delta
   double amplitude = 1e-3;    ///< delta rho / rho
   double h_over_dx = 1.2;
-  double cs = 1.0;            ///< isothermal sound speed; lambda = 1, so P_w = 1 / cs
+  double cs = 1.0;  ///< isothermal sound speed; lambda = 1, so P_w = 1 / cs
   int periods = 100;
   double courant = 0.3;
-  double jitter = 0.0;        ///< random displacement in units of Delta, to seed instabilities
-  double r = 0.0;             ///< RSPH: T_reg / P_w (0: plain SPH)
-  double alpha = 0.0;         ///< plain SPH: artificial viscosity alpha, beta = 2 alpha
+  double jitter = 0.0;  ///< random displacement in units of Delta, to seed instabilities
+  double r = 0.0;       ///< RSPH: T_reg / P_w (0: plain SPH)
+  double alpha = 0.0;   ///< plain SPH: artificial viscosity alpha, beta = 2 alpha
 
   void validate() const {
-    require(wavelength_cells >= 4 && wavelength_cells % 2 == 0, "linear wave: lambda/Delta must be an even number >= 4");
+    require(wavelength_cells >= 4 && wavelength_cells % 2 == 0,
+            "linear wave: lambda/Delta must be an even number >= 4");
     require(h_over_dx > 0.0, "linear wave: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
     require(amplitude > 0.0 && amplitude < 0.1, "linear wave: the amplitude must be small and positive");
     require(periods >= 2, "linear wave: run at least two periods");
@@ -143,11 +144,13 @@ LinearWaveResult run_linear_wave(const LinearWaveParams& s, OnStep&& on_step) {
     using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::EveryT>;
     Simulation<2, Kernel, eos::Isothermal, Reg> sim(
         linear_wave_particles(s), box, gas,
-        Reg(lattice::Square{s.spacing()}, schedule::EveryT{s.r * s.period()}, regularize::RemapParams{s.h_over_dx}), ts);
+        Reg(lattice::Square{s.spacing()}, schedule::EveryT{s.r * s.period()}, regularize::RemapParams{s.h_over_dx}),
+        ts);
     finish(sim);
   } else {
     Simulation<2, Kernel, eos::Isothermal, regularize::None, physics::ArtificialViscosity> sim(
-        linear_wave_particles(s), box, gas, regularize::None{}, ts, physics::ArtificialViscosity{s.alpha, 2.0 * s.alpha});
+        linear_wave_particles(s), box, gas, regularize::None{}, ts,
+        physics::ArtificialViscosity{s.alpha, 2.0 * s.alpha});
     finish(sim);
   }
   return res;

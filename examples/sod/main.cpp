@@ -35,7 +35,10 @@ int run(const Options& opt) {
   io::Progress progress(fmt::format("rsph-sod {}D", D), opt.sod.t_end);
   int snap = 0;
   const int n_snap = std::max(opt.snapshots, 1);
-  auto write_snap = [&] { io::write_snapshot(dir / io::snapshot_name(static_cast<std::size_t>(snap++)), sim.particles(), sim.time(), sim.steps()); };
+  auto write_snap = [&] {
+    io::write_snapshot(dir / io::snapshot_name(static_cast<std::size_t>(snap++)), sim.particles(), sim.time(),
+                       sim.steps());
+  };
   write_snap();
   for (int k = 1; k <= n_snap; ++k) {
     const double t_next = opt.sod.t_end * k / n_snap;
@@ -65,7 +68,10 @@ int run(const Options& opt) {
   const auto err = analysis::shock_tube_errors(p, exact, sim.time(), 0.5);
   const auto end = sim.totals();
   io::Json summary;
-  summary.set("test", "sod").set("dim", D).set("kernel", opt.kernel).set("particles", static_cast<std::uint64_t>(p.n_real));
+  summary.set("test", "sod")
+      .set("dim", D)
+      .set("kernel", opt.kernel)
+      .set("particles", static_cast<std::uint64_t>(p.n_real));
   summary.set("time", sim.time()).set("L1_rho", err.L1_rho).set("L1_v", err.L1_v).set("L1_P", err.L1_P);
   summary.set("energy_error", ex::relative_change(end.total_energy(), start.total_energy()));
   summary.set("mass_error", ex::relative_change(end.mass, start.mass));
@@ -75,10 +81,11 @@ int run(const Options& opt) {
   summary.set("phase_seconds", ex::phase_json(sim.phase_times()));
   summary.set("p_star_exact", exact.p_star()).set("v_star_exact", exact.v_star());
   summary.write(dir / "summary.json");
-  fmt::print("rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
-             "energy error {:.2e}\n  output: {}\n",
-             D, p.n_real, sim.steps(), wall, err.L1_rho, err.L1_v, err.L1_P,
-             ex::relative_change(end.total_energy(), start.total_energy()), dir.string());
+  fmt::print(
+      "rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
+      "energy error {:.2e}\n  output: {}\n",
+      D, p.n_real, sim.steps(), wall, err.L1_rho, err.L1_v, err.L1_P,
+      ex::relative_change(end.total_energy(), start.total_energy()), dir.string());
   return 0;
 }
 

@@ -23,20 +23,20 @@ struct SodParams {
     require(ny_left >= 2 && ny_left % 2 == 0, "Sod: ny_left must be an even number >= 2");
     require(h_over_dx > 0.0, "Sod: h/dx must be positive (got " + std::to_string(h_over_dx) + ")");
     require(t_end > 0.0, "Sod: t_end must be positive");
-    require(left.rho > 0 && right.rho > 0 && left.P > 0 && right.P > 0, "Sod: densities and pressures must be positive");
+    require(left.rho > 0 && right.rho > 0 && left.P > 0 && right.P > 0,
+            "Sod: densities and pressures must be positive");
   }
 };
 
 template <int D, class Kernel>
-using SodSimulation = Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity,
-                                 physics::GradH<D>>;
+using SodSimulation =
+    Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<D>>;
 
 /// Equal-mass particles in 1D (spacing ratio 8 across the membrane); in 2D a lattice of spacing dx on
 /// the left and 2 dx on the right so both tile the periodic strip (masses differ by the density ratio
 /// over 4).
 template <int D, class Kernel>
-  requires(D == 1 || D == 2)
-SodSimulation<D, Kernel> make_sod(const SodParams& s) {
+requires(D == 1 || D == 2) SodSimulation<D, Kernel> make_sod(const SodParams& s) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   gas.validate();

@@ -55,11 +55,16 @@ int main(int argc, char** argv) {
     auto on_step = [&](const auto& sim) {
       if (!common.quiet) progress.update(sim.time(), sim.steps());
     };
-    auto on_end = [&](const auto& sim) { io::write_snapshot(dir / io::snapshot_name(0), sim.particles(), sim.time(), sim.steps()); };
+    auto on_end = [&](const auto& sim) {
+      io::write_snapshot(dir / io::snapshot_name(0), sim.particles(), sim.time(), sim.steps());
+    };
     scenes::ShockRun r;
-    if (method == "rsph") r = scenes::run_shock(scenes::make_rsph_shock(s), s, on_step, on_end);
-    else if (method == "sph") r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end);
-    else throw InputError("unknown method '" + method + "' (rsph, sph)");
+    if (method == "rsph")
+      r = scenes::run_shock(scenes::make_rsph_shock(s), s, on_step, on_end);
+    else if (method == "sph")
+      r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end);
+    else
+      throw InputError("unknown method '" + method + "' (rsph, sph)");
     progress.finish();
 
     io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});
@@ -83,10 +88,11 @@ int main(int argc, char** argv) {
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
     summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
     summary.write(dir / "summary.json");
-    fmt::print("rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"
-               "  L1(rho) = {:.4g}, L1(v) = {:.4g}; shock at {:.4f} (exact {:.4f}); penetration {:.3f}; energy error {:.2e}\n",
-               method, s.alpha, s.beta, r.particles, r.steps, r.regularizations, r.wall_seconds, r.errors.L1_rho,
-               r.errors.L1_v, r.shock_position, r.shock_position_exact, r.penetration, r.energy_error);
+    fmt::print(
+        "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"
+        "  L1(rho) = {:.4g}, L1(v) = {:.4g}; shock at {:.4f} (exact {:.4f}); penetration {:.3f}; energy error {:.2e}\n",
+        method, s.alpha, s.beta, r.particles, r.steps, r.regularizations, r.wall_seconds, r.errors.L1_rho,
+        r.errors.L1_v, r.shock_position, r.shock_position_exact, r.penetration, r.energy_error);
     return 0;
   });
 }

@@ -16,7 +16,7 @@ struct StrongShockParams {
   analysis::GasState left{1.0, 0.0, 1e10}, right{0.125, 0.0, 0.1};
   double gamma = 1.4;
   double t_end = 2.5e-6;
-  double courant = 0.2;  ///< 0.3 leaves a 5e-6 energy error from the first steps across the 1e10 jump
+  double courant = 0.2;            ///< 0.3 leaves a 5e-6 energy error from the first steps across the 1e10 jump
   double alpha = 1.0, beta = 2.0;  ///< Monaghan-Gingold viscosity (both methods)
   // RSPH: a uniform lattice of nx x ny with h/Delta = 2 and the paper's Appendix A parameters
   int nx = 512, ny = 8;
@@ -62,7 +62,8 @@ void add_block(P& p, const analysis::GasState& s, const eos::IdealGas& gas, doub
   const double m = s.rho * dx * dx / kernel::lattice_sum<Kernel, 2>(h_over_dx);
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i)
-      p.add(m, Vec<2>(x0 + (i + 0.5) * dx, (j + 0.5) * dx), Vec<2>(s.v, 0.0), h_over_dx * dx, gas.internal_energy(s.rho, s.P));
+      p.add(m, Vec<2>(x0 + (i + 0.5) * dx, (j + 0.5) * dx), Vec<2>(s.v, 0.0), h_over_dx * dx,
+            gas.internal_energy(s.rho, s.P));
 }
 
 /// The shock: the largest x whose Delta-wide bin has mean density above the midpoint of the pre- and
@@ -77,7 +78,8 @@ double shock_position(const P& p, double threshold, double bin) {
     count[static_cast<std::size_t>(i)] += 1.0;
   }
   for (int i = n - 1; i >= 0; --i)
-    if (count[static_cast<std::size_t>(i)] > 0 && sum[static_cast<std::size_t>(i)] / count[static_cast<std::size_t>(i)] > threshold)
+    if (count[static_cast<std::size_t>(i)] > 0 &&
+        sum[static_cast<std::size_t>(i)] / count[static_cast<std::size_t>(i)] > threshold)
       return (i + 1) * bin;
   return 0.0;
 }
@@ -144,7 +146,8 @@ inline RsphShock make_rsph_shock(const StrongShockParams& s) {
   TimeStepParams ts;
   ts.courant = s.courant;
   return RsphShock(std::move(p), box, gas,
-                   ShockRegularizer(lattice::Square{dx}, schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
+                   ShockRegularizer(lattice::Square{dx},
+                                    schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
                                     regularize::RemapParams{s.h_over_dx}),
                    ts, physics::ArtificialViscosity{s.alpha, s.beta});
 }
@@ -154,7 +157,8 @@ inline SphShock make_sph_shock(const StrongShockParams& s) {
   const eos::IdealGas gas{s.gamma};
   ParticleSet<2, true> p;
   detail::add_block<kernel::CubicSpline>(p, s.left, gas, 0.0, s.sph_nx_left, s.sph_ny_left, 0.5 / s.sph_nx_left, s.eta);
-  detail::add_block<kernel::CubicSpline>(p, s.right, gas, 0.5, s.sph_nx_right, s.sph_ny_right, 0.5 / s.sph_nx_right, s.eta);
+  detail::add_block<kernel::CubicSpline>(p, s.right, gas, 0.5, s.sph_nx_right, s.sph_ny_right, 0.5 / s.sph_nx_right,
+                                         s.eta);
   Box<2> box;
   box.hi = Vec<2>(1.0, s.strip_width_sph());
   box.edge = {Edge::reflecting, Edge::periodic};

@@ -35,7 +35,7 @@ struct PhaseTimes {
 };
 
 template <int D, class Kernel, class EOS, class Reg, class... Terms>
-  requires SupportedDimension<D>
+requires SupportedDimension<D>
 class Simulation {
   static_assert(check_kernel<Kernel, D>());
   static_assert(check_equation_of_state<EOS, D>());
@@ -50,12 +50,17 @@ class Simulation {
   /// Equal-mass SPH with h solved from the density (a SmoothingLengthSolver term); otherwise h is fixed
   /// between regularizations and pairs use h_ab = (h_a + h_b) / 2 as in the paper.
   static constexpr bool grad_h = (SmoothingLengthSolver<Terms> || ...);
-  static_assert((int(SmoothingLengthSolver<Terms>) + ... + 0) <= 1, "a simulation takes at most one smoothing-length solver");
+  static_assert((int(SmoothingLengthSolver<Terms>) + ... + 0) <= 1,
+                "a simulation takes at most one smoothing-length solver");
   using Particles = ParticleSet<D, has_energy>;
   using KernelType = Kernel;
 
   Simulation(Particles particles, Box<D> box, EOS eos, Reg reg, TimeStepParams params, Terms... terms)
-      : p_(std::move(particles)), box_(box), eos_(std::move(eos)), reg_(std::move(reg)), params_(params),
+      : p_(std::move(particles)),
+        box_(box),
+        eos_(std::move(eos)),
+        reg_(std::move(reg)),
+        params_(params),
         terms_(std::move(terms)...) {
     validate();
     compute_rates();
@@ -151,7 +156,9 @@ class Simulation {
       on_step(*this);
     }
   }
-  void run_until(double t_end) { run_until(t_end, [](const Simulation&) {}); }
+  void run_until(double t_end) {
+    run_until(t_end, [](const Simulation&) {});
+  }
 
   /// Ghosts, neighbours, density (eq. 2), pressure, then accelerations (eq. 3) and heating (eq. 4).
   void compute_rates() {
@@ -163,7 +170,9 @@ class Simulation {
         const bool fits = solve_density_and_h(kHMargin);
         times_.density += seconds_since(t0);
         if (fits) break;
-        if (attempt == 4) throw NumericalError("smoothing lengths keep outgrowing their neighbour search at t = " + std::to_string(time_));
+        if (attempt == 4)
+          throw NumericalError("smoothing lengths keep outgrowing their neighbour search at t = " +
+                               std::to_string(time_));
       }
       auto t0 = clock::now();
       update_pressure();
@@ -252,13 +261,13 @@ class Simulation {
 
  private:
   using clock = std::chrono::steady_clock;
-  static double seconds_since(clock::time_point t0) {
-    return std::chrono::duration<double>(clock::now() - t0).count();
-  }
+  static double seconds_since(clock::time_point t0) { return std::chrono::duration<double>(clock::now() - t0).count(); }
 
   double energy_of(std::size_t a) const {
-    if constexpr (has_energy) return p_.u[a];
-    else return 0.0;
+    if constexpr (has_energy)
+      return p_.u[a];
+    else
+      return 0.0;
   }
 
   template <class T>
@@ -330,7 +339,10 @@ class Simulation {
         const double rho_h = solver.rho_of_h(m_a, h);
         const double f = rho - rho_h;
         if (std::abs(f) <= solver.tolerance * rho_h) break;
-        if (f > 0.0) hi = h; else lo = h;  // f rises with h: rho_h falls as h^-D
+        if (f > 0.0)
+          hi = h;
+        else
+          lo = h;  // f rises with h: rho_h falls as h^-D
         const double df = sum_dW_dh + D * rho_h / h;
         double next = df != 0.0 ? h - f / df : 0.5 * (lo + hi);
         if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
@@ -375,8 +387,14 @@ class Simulation {
   void keep_inside(std::size_t a) {
     for (int k = 0; k < D; ++k) {
       if (box_.edge[k] == Edge::reflecting) {
-        if (p_.x[a][k] < box_.lo[k]) { p_.x[a][k] = 2.0 * box_.lo[k] - p_.x[a][k]; v_half_[a][k] = -v_half_[a][k]; }
-        if (p_.x[a][k] > box_.hi[k]) { p_.x[a][k] = 2.0 * box_.hi[k] - p_.x[a][k]; v_half_[a][k] = -v_half_[a][k]; }
+        if (p_.x[a][k] < box_.lo[k]) {
+          p_.x[a][k] = 2.0 * box_.lo[k] - p_.x[a][k];
+          v_half_[a][k] = -v_half_[a][k];
+        }
+        if (p_.x[a][k] > box_.hi[k]) {
+          p_.x[a][k] = 2.0 * box_.hi[k] - p_.x[a][k];
+          v_half_[a][k] = -v_half_[a][k];
+        }
       }
     }
     box_.wrap(p_.x[a]);
@@ -396,10 +414,12 @@ class Simulation {
       require(p_.m[a] > 0.0 && std::isfinite(p_.m[a]), who + "mass must be positive and finite");
       require(p_.h[a] > 0.0 && std::isfinite(p_.h[a]), who + "smoothing length h must be positive and finite");
       require(p_.x[a].allFinite() && p_.v[a].allFinite(), who + "position and velocity must be finite");
-      if constexpr (has_energy) require(p_.u[a] >= 0.0 && std::isfinite(p_.u[a]), who + "internal energy must be non-negative");
+      if constexpr (has_energy)
+        require(p_.u[a] >= 0.0 && std::isfinite(p_.u[a]), who + "internal energy must be non-negative");
       for (int k = 0; k < D; ++k)
         if (box_.edge[k] != Edge::open)
-          require(p_.x[a][k] >= box_.lo[k] && p_.x[a][k] <= box_.hi[k], who + "lies outside the box along axis " + std::to_string(k));
+          require(p_.x[a][k] >= box_.lo[k] && p_.x[a][k] <= box_.hi[k],
+                  who + "lies outside the box along axis " + std::to_string(k));
     }
   }
 

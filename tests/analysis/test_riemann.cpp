@@ -27,7 +27,8 @@ TEST_CASE("exact Riemann solver: pressure ratio 1e10 (Xiao 2004) satisfies Ranki
   const double S = s.right_shock_speed();
   const double rho2 = s.rho_star_right();
   CHECK(R.rho * (R.v - S) == Approx(rho2 * (s.v_star() - S)).epsilon(1e-10));
-  CHECK(R.rho * (R.v - S) * (R.v - S) + R.P == Approx(rho2 * (s.v_star() - S) * (s.v_star() - S) + s.p_star()).epsilon(1e-10));
+  CHECK(R.rho * (R.v - S) * (R.v - S) + R.P ==
+        Approx(rho2 * (s.v_star() - S) * (s.v_star() - S) + s.p_star()).epsilon(1e-10));
   // strong-shock limit: density jump (g + 1) / (g - 1) = 6
   CHECK(rho2 / R.rho == Approx(6.0).epsilon(1e-4));
   // isentropic left rarefaction: P / rho^g constant

@@ -31,13 +31,15 @@ TEST_CASE("bad input is refused with a message naming the cause", "[validation]"
                     Catch::Contains("alpha and beta must be non-negative"));
   auto outside = lattice_1d(10, 1.2);
   outside.x[3][0] = 1.5;
-  CHECK_THROWS_WITH(Sim1(outside, walls(), eos::IdealGas{1.4}, {}, {}, {}), Catch::Contains("particle 3: lies outside the box"));
+  CHECK_THROWS_WITH(Sim1(outside, walls(), eos::IdealGas{1.4}, {}, {}, {}),
+                    Catch::Contains("particle 3: lies outside the box"));
   Box<1> empty = walls();
   empty.hi[0] = empty.lo[0];
   CHECK_THROWS_WITH(Sim1(lattice_1d(10, 1.2), empty, eos::IdealGas{1.4}, {}, {}, {}), Catch::Contains("box is empty"));
   auto nan = lattice_1d(10, 1.2);
   nan.v[2][0] = std::nan("");
-  CHECK_THROWS_WITH(Sim1(nan, walls(), eos::IdealGas{1.4}, {}, {}, {}), Catch::Contains("particle 2: position and velocity must be finite"));
+  CHECK_THROWS_WITH(Sim1(nan, walls(), eos::IdealGas{1.4}, {}, {}, {}),
+                    Catch::Contains("particle 2: position and velocity must be finite"));
 }
 
 TEST_CASE("a NaN appearing during a run stops it with the particle named", "[validation]") {
@@ -50,7 +52,8 @@ TEST_CASE("a NaN appearing during a run stops it with the particle named", "[val
 TEST_CASE("mirror ghosts at reflecting walls keep a uniform lattice uniform", "[boundary]") {
   Sim1 sim(lattice_1d(50, 1.2), walls(), eos::IdealGas{1.4}, {}, {}, {});
   const double expected = kernel::lattice_sum<kernel::CubicSpline, 1>(1.2);
-  for (std::size_t a = 0; a < sim.particles().n_real; ++a) CHECK(sim.particles().rho[a] == Approx(expected).epsilon(1e-12));
+  for (std::size_t a = 0; a < sim.particles().n_real; ++a)
+    CHECK(sim.particles().rho[a] == Approx(expected).epsilon(1e-12));
   for (int s = 0; s < 20; ++s) sim.step();
   for (std::size_t a = 0; a < sim.particles().n_real; ++a) CHECK(std::abs(sim.particles().v[a][0]) < 1e-12);
 }

@@ -31,11 +31,13 @@ TEST_CASE("drifting pulse: a shift of one spacing per regularization keeps the p
   const auto r = run(1.0);
   REQUIRE(r.m_end.size() == r.m0.size());
   // after 40 regularizations the lattice has moved 40 sites: compare with the initial masses shifted back
-  for (std::size_t i = 0; i < r.m0.size(); ++i) CHECK(r.m_end[(i + 40) % r.m0.size()] == Approx(r.m0[i]).epsilon(1e-12));
+  for (std::size_t i = 0; i < r.m0.size(); ++i)
+    CHECK(r.m_end[(i + 40) % r.m0.size()] == Approx(r.m0[i]).epsilon(1e-12));
   CHECK(r.widths.back() == Approx(r.widths.front()).epsilon(1e-10));
 }
 
-TEST_CASE("drifting pulse: widths grow monotonically; half a spacing diffuses most; mass is exact", "[drifting_pulse]") {
+TEST_CASE("drifting pulse: widths grow monotonically; half a spacing diffuses most; mass is exact",
+          "[drifting_pulse]") {
   const auto a = run(0.01), b = run(0.1), c = run(0.5), d = run(1.0);
   for (const auto* r : {&a, &b, &c}) {
     for (std::size_t k = 1; k < r->widths.size(); ++k) CHECK(r->widths[k] > r->widths[k - 1]);

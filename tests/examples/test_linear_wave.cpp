@@ -19,7 +19,8 @@ TEST_CASE("eq. (11) with Delta t = P_w returns gamma of a synthetic damped wave"
 }
 
 namespace {
-scenes::LinearWaveResult wave(double r, double alpha, double h_over_dx = 1.2, double jitter = 0.0, bool quintic = true) {
+scenes::LinearWaveResult wave(double r, double alpha, double h_over_dx = 1.2, double jitter = 0.0,
+                              bool quintic = true) {
   scenes::LinearWaveParams s;
   s.wavelength_cells = 24;
   s.periods = 20;
@@ -28,7 +29,8 @@ scenes::LinearWaveResult wave(double r, double alpha, double h_over_dx = 1.2, do
   s.h_over_dx = h_over_dx;
   s.jitter = jitter;
   auto none = [](const auto&) {};
-  return quintic ? scenes::run_linear_wave<kernel::QuinticSpline>(s, none) : scenes::run_linear_wave<kernel::CubicSpline>(s, none);
+  return quintic ? scenes::run_linear_wave<kernel::QuinticSpline>(s, none)
+                 : scenes::run_linear_wave<kernel::CubicSpline>(s, none);
 }
 }  // namespace
 

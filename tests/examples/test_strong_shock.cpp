@@ -19,7 +19,8 @@ TEST_CASE("strong shock, pressure ratio 1e10: RSPH keeps the shock in place and 
   scenes::StrongShockParams s;
   s.nx = 256;
   s.ny = 6;
-  const auto r = scenes::run_shock(scenes::make_rsph_shock(s), s, [](const auto&) {}, [](const auto&) {});
+  const auto r = scenes::run_shock(
+      scenes::make_rsph_shock(s), s, [](const auto&) {}, [](const auto&) {});
   INFO("shock " << r.shock_position << " vs " << r.shock_position_exact << ", energy error " << r.energy_error
                 << ", L1(rho) " << r.errors.L1_rho << ", regularizations " << r.regularizations);
   check_physical(r);
@@ -37,7 +38,8 @@ TEST_CASE("strong shock: plain SPH with alpha = 1 runs, conserves energy, and it
   s.sph_ny_left = 12;
   s.sph_nx_right = 50;
   s.sph_ny_right = 2;
-  const auto r = scenes::run_shock(scenes::make_sph_shock(s), s, [](const auto&) {}, [](const auto&) {});
+  const auto r = scenes::run_shock(
+      scenes::make_sph_shock(s), s, [](const auto&) {}, [](const auto&) {});
   INFO("SPH: shock " << r.shock_position << " vs " << r.shock_position_exact << ", penetration " << r.penetration
                      << ", L1(rho) " << r.errors.L1_rho);
   check_physical(r);

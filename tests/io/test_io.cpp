@@ -100,6 +100,7 @@ TEST_CASE("summary.json: ordered keys, nested objects, non-finite numbers as nul
   j.set("bad", std::nan("")).set("list", std::vector<double>{1, 2});
   j.write(dir / "summary.json");
   CHECK(slurp(dir / "summary.json") ==
-        "{\n  \"test\": \"sod\",\n  \"L1_rho\": 0.00339,\n  \"steps\": 1215,\n  \"phase_seconds\": {\n    \"density\": 0.5\n  },\n"
+        "{\n  \"test\": \"sod\",\n  \"L1_rho\": 0.00339,\n  \"steps\": 1215,\n  \"phase_seconds\": {\n    \"density\": "
+        "0.5\n  },\n"
         "  \"bad\": null,\n  \"list\": [1, 2]\n}\n");
 }

@@ -18,9 +18,12 @@ double kernel_integral() {
   for (int i = 0; i <= n; ++i) {
     const double q = i * dq;
     double shell;
-    if constexpr (D == 1) shell = 2.0;
-    else if constexpr (D == 2) shell = 2.0 * std::numbers::pi * q;
-    else shell = 4.0 * std::numbers::pi * q * q;
+    if constexpr (D == 1)
+      shell = 2.0;
+    else if constexpr (D == 2)
+      shell = 2.0 * std::numbers::pi * q;
+    else
+      shell = 4.0 * std::numbers::pi * q * q;
     const double w = (i == 0 || i == n) ? 1.0 : (i % 2 ? 4.0 : 2.0);
     sum += w * shell * kernel::W<K, D>(q, 1.0);
   }
@@ -84,8 +87,8 @@ TEST_CASE("lattice sum: the SPH density bias of a uniform lattice", "[kernel]") 
   // A wide kernel on a fine lattice recovers the integral; h/dx = 1.2 with the cubic spline is 0.18 % off in 1D.
   CHECK(kernel::lattice_sum<kernel::QuinticSpline, 2>(3.0) == Approx(1.0).margin(1e-6));
   // by hand: (2/3)/1.2 [f(0) + 2 f(1/1.2) + 2 f(2/1.2)] = 1.0018004
-  const double by_hand = (2.0 / 3.0) / 1.2 *
-                         (1.0 + 2.0 * kernel::CubicSpline::f(1.0 / 1.2) + 2.0 * kernel::CubicSpline::f(2.0 / 1.2));
+  const double by_hand =
+      (2.0 / 3.0) / 1.2 * (1.0 + 2.0 * kernel::CubicSpline::f(1.0 / 1.2) + 2.0 * kernel::CubicSpline::f(2.0 / 1.2));
   CHECK(kernel::lattice_sum<kernel::CubicSpline, 1>(1.2) == Approx(by_hand).epsilon(1e-14));
   CHECK(by_hand == Approx(1.0018004).margin(1e-7));
 }
@@ -94,7 +97,9 @@ namespace {
 struct NoDerivative {
   static constexpr double support = 1.0;
   template <int D>
-  static constexpr double sigma() { return 1.0; }
+  static constexpr double sigma() {
+    return 1.0;
+  }
   static double f(double) { return 0.0; }
 };
 }  // namespace

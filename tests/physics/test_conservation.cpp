@@ -52,9 +52,9 @@ TEST_CASE("fixed-h SPH (eqs. 2-4) with artificial viscosity conserves momentum t
 }
 
 TEST_CASE("grad-h SPH with artificial viscosity conserves momentum to round-off", "[physics]") {
-  Simulation<2, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<2>> sim(
-      random_gas(24, 2, true), periodic_box(), eos::IdealGas{1.4}, {}, {}, physics::ArtificialViscosity{1.0, 2.0},
-      physics::GradH<2>{1.2});
+  Simulation<2, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<2>>
+      sim(random_gas(24, 2, true), periodic_box(), eos::IdealGas{1.4}, {}, {}, physics::ArtificialViscosity{1.0, 2.0},
+          physics::GradH<2>{1.2});
   check_conservation(sim, 40);
   // h and rho satisfy h = eta (m / rho)^(1/2) after the solve
   const auto& p = sim.particles();
@@ -87,7 +87,7 @@ TEST_CASE("artificial conductivity: heat flows from hot to cold and the energy s
   ParticleSet<1, true> p;
   p.add(1.0, Vec<1>(0.0), Vec<1>(0.0), 1.0, 2.0);  // hot
   p.add(1.0, Vec<1>(0.8), Vec<1>(0.0), 1.0, 1.0);  // cold
-  Box<1> box;  // open: two particles alone
+  Box<1> box;                                      // open: two particles alone
   Simulation<1, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialConductivity> sim(
       p, box, eos::IdealGas{5.0 / 3.0}, {}, {}, physics::ArtificialConductivity{1.0});
   const auto& q = sim.particles();

@@ -5,8 +5,8 @@
 #include <random>
 
 using namespace rsph;
-using regularize::RemapParams;
 using regularize::remap_onto_lattice;
+using regularize::RemapParams;
 
 namespace {
 
@@ -139,8 +139,8 @@ TEST_CASE("fuzz: sheared, clustered, near-coincident, collinear and lattice-corn
     check_conserving_remap(p, periodic, lattice::Square{1.0 / 20});
     auto q = jittered_gas(20, 0.3, 11);
     for (std::size_t a = 0; a + 1 < q.n_real; a += 7) q.x[a + 1] = q.x[a] + Vec<2>(1e-9, 0.3e-9);
-    check_conserving_remap<2, true, lattice::Square, geometry::BoostVoronoi>(q, box_with(Edge::reflecting, Edge::reflecting),
-                                                                            lattice::Square{1.0 / 20});
+    check_conserving_remap<2, true, lattice::Square, geometry::BoostVoronoi>(
+        q, box_with(Edge::reflecting, Edge::reflecting), lattice::Square{1.0 / 20});
   }
   SECTION("collinear rows and particles on lattice corners") {
     ParticleSet<2, true> p;
@@ -159,7 +159,8 @@ TEST_CASE("fuzz: sheared, clustered, near-coincident, collinear and lattice-corn
     auto p = jittered_gas(10, 0.3, 13);
     p.x[2][0] = -0.25;
     geometry::LocalVoronoi builder;
-    CHECK_THROWS_WITH(remap_onto_lattice(p, periodic, square, builder, RemapParams{}), Catch::Contains("outside the domain"));
+    CHECK_THROWS_WITH(remap_onto_lattice(p, periodic, square, builder, RemapParams{}),
+                      Catch::Contains("outside the domain"));
   }
 }
 

@@ -27,7 +27,8 @@ bool adaptive_fires(double scale, schedule::Adaptive<Kernel, 2> adaptive) {
   Box<2> box;
   box.edge = {Edge::periodic, Edge::periodic};
   RSPH sim(scaled_lattice(24, scale), box, eos::IdealGas{1.4},
-           regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<Kernel, 2>>(lattice::Square{1.0 / 24}, adaptive),
+           regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<Kernel, 2>>(lattice::Square{1.0 / 24},
+                                                                                          adaptive),
            TimeStepParams{});
   StepInfo info;
   info.neighbors = &sim.neighbor_list();
@@ -46,11 +47,12 @@ TEST_CASE("Appendix A neighbour numbers: N(h/Delta = 1.1) = 9.5 and N(5) = 308 a
   CHECK(N_of(5.0) == Approx(308.0).margin(1.0));
 }
 
-TEST_CASE("the adaptive schedule fires on compressed and expanded lattices and is quiet on a regular one", "[schedule]") {
+TEST_CASE("the adaptive schedule fires on compressed and expanded lattices and is quiet on a regular one",
+          "[schedule]") {
   schedule::Adaptive<Kernel, 2> a{9.5, 20.0, 0.4, 128};  // N_max low enough to see h/Delta = 1.5
-  CHECK_FALSE(adaptive_fires(1.0, a));                     // h/Delta = 1.2: N = 12.4
-  CHECK(adaptive_fires(1.25, a));                          // expanded: h/Delta = 0.96
-  CHECK(adaptive_fires(0.8, a));                           // compressed: h/Delta = 1.5
+  CHECK_FALSE(adaptive_fires(1.0, a));                   // h/Delta = 1.2: N = 12.4
+  CHECK(adaptive_fires(1.25, a));                        // expanded: h/Delta = 0.96
+  CHECK(adaptive_fires(0.8, a));                         // compressed: h/Delta = 1.5
   schedule::Adaptive<Kernel, 2> paper{9.5, 308.0, 0.4, 128};
   CHECK_FALSE(adaptive_fires(1.0, paper));
   CHECK(adaptive_fires(0.2, paper));  // h/Delta = 6
@@ -80,8 +82,8 @@ TEST_CASE("RSPH in a simulation: regularizes every T_reg exactly and conserves a
   const double dx = 1.0 / n;
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
-      p.add(dx * dx, Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>(0.3 + 0.05 * std::sin(6.283 * j * dx), 0.0), 1.2 * dx,
-            1.0);
+      p.add(dx * dx, Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>(0.3 + 0.05 * std::sin(6.283 * j * dx), 0.0),
+            1.2 * dx, 1.0);
   Box<2> box;
   box.edge = {Edge::periodic, Edge::periodic};
   Sim sim(p, box, eos::IdealGas{1.4}, Reg(lattice::Square{dx}, schedule::EveryT{0.01}), TimeStepParams{},

@@ -18,7 +18,8 @@ class ExactRiemann {
  public:
   ExactRiemann(GasState left, GasState right, double gamma) : L_(left), R_(right), g_(gamma) {
     require(gamma > 1.0, "Riemann solver: gamma must exceed 1");
-    require(L_.rho > 0 && R_.rho > 0 && L_.P > 0 && R_.P > 0, "Riemann solver: densities and pressures must be positive");
+    require(L_.rho > 0 && R_.rho > 0 && L_.P > 0 && R_.P > 0,
+            "Riemann solver: densities and pressures must be positive");
     cL_ = std::sqrt(g_ * L_.P / L_.rho);
     cR_ = std::sqrt(g_ * R_.P / R_.rho);
     require(2.0 / (g_ - 1.0) * (cL_ + cR_) > R_.v - L_.v, "Riemann solver: the data create a vacuum");
@@ -104,10 +105,16 @@ class ExactRiemann {
     while (F(hi, dF) < 0) hi *= 2;
     for (int it = 0; it < 200; ++it) {
       const double Fp = F(p, dF);
-      if (Fp < 0) lo = std::max(lo, p); else hi = std::min(hi, p);
+      if (Fp < 0)
+        lo = std::max(lo, p);
+      else
+        hi = std::min(hi, p);
       double next = p - Fp / dF;
       if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-      if (std::abs(next - p) <= 1e-15 * std::max(p, 1e-300)) { p = next; break; }
+      if (std::abs(next - p) <= 1e-15 * std::max(p, 1e-300)) {
+        p = next;
+        break;
+      }
       p = next;
     }
     p_star_ = p;

@@ -14,7 +14,9 @@ struct PrescribedMotion {
   Motion motion;
   explicit PrescribedMotion(Motion m) : motion(std::move(m)) {}
   template <class V>
-  void prescribe(std::size_t i, V& x, V& v, double t) const { motion(i, t, x, v); }
+  void prescribe(std::size_t i, V& x, V& v, double t) const {
+    motion(i, t, x, v);
+  }
 };
 
 }  // namespace rsph::boundary

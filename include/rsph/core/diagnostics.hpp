@@ -15,7 +15,7 @@ struct Conservation {
   Vec<D> momentum = Vec<D>::Zero();
   double angular_momentum = 0.0;  ///< z-component about the origin (zero in 1D; L_z in 3D)
   double kinetic = 0.0;
-  double thermal = 0.0;            ///< sum m u, zero for gases without u
+  double thermal = 0.0;  ///< sum m u, zero for gases without u
   double total_energy() const { return kinetic + thermal; }
 };
 

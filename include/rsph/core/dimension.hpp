@@ -19,7 +19,7 @@ enum class Edge { open, periodic, reflecting };
 
 /// An axis-aligned domain with one edge kind per axis (both faces of an axis share it).
 template <int D>
-  requires SupportedDimension<D>
+requires SupportedDimension<D>
 struct Box {
   Vec<D> lo = Vec<D>::Zero();
   Vec<D> hi = Vec<D>::Ones();

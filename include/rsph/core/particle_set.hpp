@@ -55,7 +55,10 @@ struct ParticleSet {
   }
 
   /// Drops every ghost.
-  void clear_ghosts() { resize_all(n_real); ghost_source.clear(); }
+  void clear_ghosts() {
+    resize_all(n_real);
+    ghost_source.clear();
+  }
 
   /// Appends a ghost copy of particle `source` (itself possibly a ghost) at `pos` with velocity `vel`.
   void add_ghost(std::size_t source, const Vec<D>& pos, const Vec<D>& vel) {
@@ -92,9 +95,19 @@ struct ParticleSet {
   }
 
   void reserve(std::size_t n) {
-    m.reserve(n); rho.reserve(n); h.reserve(n); P.reserve(n); cs.reserve(n);
-    x.reserve(n); v.reserve(n); dv_dt.reserve(n); frozen.reserve(n);
-    if constexpr (HasEnergy) { u.reserve(n); du_dt.reserve(n); }
+    m.reserve(n);
+    rho.reserve(n);
+    h.reserve(n);
+    P.reserve(n);
+    cs.reserve(n);
+    x.reserve(n);
+    v.reserve(n);
+    dv_dt.reserve(n);
+    frozen.reserve(n);
+    if constexpr (HasEnergy) {
+      u.reserve(n);
+      du_dt.reserve(n);
+    }
   }
 };
 

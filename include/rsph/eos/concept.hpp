@@ -16,11 +16,19 @@ concept EquationOfState = requires(const E& e, double rho, double u, const Vec<D
 
 template <class E, int D>
 constexpr bool check_equation_of_state() {
-  static_assert(requires { E::has_internal_energy; }, "an equation of state needs `static constexpr bool has_internal_energy` (does the gas carry u?)");
-  static_assert(requires(const E& e, double rho, double u, const Vec<D>& x) { { e.pressure(rho, u, x) } -> std::same_as<double>; },
-                "an equation of state needs `double pressure(double rho, double u, const Vec<D>& x) const`");
-  static_assert(requires(const E& e, double rho, double u, const Vec<D>& x) { { e.sound_speed(rho, u, x) } -> std::same_as<double>; },
-                "an equation of state needs `double sound_speed(double rho, double u, const Vec<D>& x) const`");
+  static_assert(
+      requires { E::has_internal_energy; },
+      "an equation of state needs `static constexpr bool has_internal_energy` (does the gas carry u?)");
+  static_assert(
+      requires(const E& e, double rho, double u, const Vec<D>& x) {
+        { e.pressure(rho, u, x) } -> std::same_as<double>;
+      },
+      "an equation of state needs `double pressure(double rho, double u, const Vec<D>& x) const`");
+  static_assert(
+      requires(const E& e, double rho, double u, const Vec<D>& x) {
+        { e.sound_speed(rho, u, x) } -> std::same_as<double>;
+      },
+      "an equation of state needs `double sound_speed(double rho, double u, const Vec<D>& x) const`");
   return true;
 }
 

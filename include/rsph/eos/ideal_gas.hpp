@@ -12,13 +12,15 @@ struct IdealGas {
   static constexpr bool has_internal_energy = true;
   double gamma = 1.4;
 
-  void validate() const {
-    require(gamma > 1.0, "ideal gas: gamma must exceed 1 (got " + std::to_string(gamma) + ")");
+  void validate() const { require(gamma > 1.0, "ideal gas: gamma must exceed 1 (got " + std::to_string(gamma) + ")"); }
+  template <class X>
+  double pressure(double rho, double u, const X&) const {
+    return (gamma - 1.0) * rho * u;
   }
   template <class X>
-  double pressure(double rho, double u, const X&) const { return (gamma - 1.0) * rho * u; }
-  template <class X>
-  double sound_speed(double, double u, const X&) const { return std::sqrt(gamma * (gamma - 1.0) * std::max(u, 0.0)); }
+  double sound_speed(double, double u, const X&) const {
+    return std::sqrt(gamma * (gamma - 1.0) * std::max(u, 0.0));
+  }
   /// u for a given pressure and density, for setting up initial states.
   double internal_energy(double rho, double P) const { return P / ((gamma - 1.0) * rho); }
 };

@@ -12,11 +12,17 @@ struct Isothermal {
   static constexpr bool has_internal_energy = false;
   double cs = 1.0;
 
-  void validate() const { require(cs > 0.0, "isothermal gas: sound speed must be positive (got " + std::to_string(cs) + ")"); }
+  void validate() const {
+    require(cs > 0.0, "isothermal gas: sound speed must be positive (got " + std::to_string(cs) + ")");
+  }
   template <class X>
-  double pressure(double rho, double, const X&) const { return cs * cs * rho; }
+  double pressure(double rho, double, const X&) const {
+    return cs * cs * rho;
+  }
   template <class X>
-  double sound_speed(double, double, const X&) const { return cs; }
+  double sound_speed(double, double, const X&) const {
+    return cs;
+  }
 };
 
 /// P = c_s(x)^2 rho with the sound speed a function of position (c_s / v_K fixed in a disk, §5).
@@ -27,18 +33,27 @@ struct LocallyIsothermal {
 
   explicit LocallyIsothermal(SoundSpeedOfPosition f) : cs_of_x(std::move(f)) {}
   template <class X>
-  double pressure(double rho, double, const X& x) const { const double c = cs_of_x(x); return c * c * rho; }
+  double pressure(double rho, double, const X& x) const {
+    const double c = cs_of_x(x);
+    return c * c * rho;
+  }
   template <class X>
-  double sound_speed(double, double, const X& x) const { return cs_of_x(x); }
+  double sound_speed(double, double, const X& x) const {
+    return cs_of_x(x);
+  }
 };
 
 /// No pressure at all (the viscous ring of §4).
 struct Pressureless {
   static constexpr bool has_internal_energy = false;
   template <class X>
-  double pressure(double, double, const X&) const { return 0.0; }
+  double pressure(double, double, const X&) const {
+    return 0.0;
+  }
   template <class X>
-  double sound_speed(double, double, const X&) const { return 0.0; }
+  double sound_speed(double, double, const X&) const {
+    return 0.0;
+  }
 };
 
 }  // namespace rsph::eos

@@ -16,9 +16,13 @@ struct Polytropic {
   KOfPosition K_of_x;
 
   Polytropic(double gamma_, KOfPosition K) : gamma(gamma_), K_of_x(std::move(K)) {}
-  void validate() const { require(gamma > 1.0, "polytropic gas: gamma must exceed 1 (got " + std::to_string(gamma) + ")"); }
+  void validate() const {
+    require(gamma > 1.0, "polytropic gas: gamma must exceed 1 (got " + std::to_string(gamma) + ")");
+  }
   template <class X>
-  double pressure(double rho, double, const X& x) const { return K_of_x(x) * std::pow(rho, gamma); }
+  double pressure(double rho, double, const X& x) const {
+    return K_of_x(x) * std::pow(rho, gamma);
+  }
   template <class X>
   double sound_speed(double rho, double u, const X& x) const {
     return rho > 0.0 ? std::sqrt(gamma * pressure(rho, u, x) / rho) : 0.0;
@@ -29,7 +33,9 @@ struct Polytropic {
 struct ConstantK {
   double K = 1.0;
   template <class X>
-  double operator()(const X&) const { return K; }
+  double operator()(const X&) const {
+    return K;
+  }
 };
 
 }  // namespace rsph::eos

@@ -126,16 +126,28 @@ inline Bounds bounds(const ConvexPolygon& p) {
 
 /// Area of p inside the rectangle [x0, x1] x [y0, y1]; `pb` are p's bounds and `p_area` its area,
 /// so that sides which cannot cut are skipped.
-inline double clipped_area_rect(const ConvexPolygon& p, const Bounds& pb, double p_area, double x0, double y0, double x1,
-                                double y1) {
+inline double clipped_area_rect(const ConvexPolygon& p, const Bounds& pb, double p_area, double x0, double y0,
+                                double x1, double y1) {
   if (pb.lo.x() >= x1 || pb.hi.x() <= x0 || pb.lo.y() >= y1 || pb.hi.y() <= y0) return 0.0;
-  const bool cut_x0 = pb.lo.x() < x0, cut_x1 = pb.hi.x() > x1, cut_y0 = pb.lo.y() < y0, cut_y1 = pb.hi.y() > y1;
+  const bool cut_x0 = pb.lo.x()<x0, cut_x1 = pb.hi.x()> x1, cut_y0 = pb.lo.y()<y0, cut_y1 = pb.hi.y()> y1;
   if (!(cut_x0 || cut_x1 || cut_y0 || cut_y1)) return p_area;
   ConvexPolygon a = p, b;
-  if (cut_x0) { clip_halfplane(a, Point(-1, 0), -x0, b); a = b; }
-  if (cut_x1) { clip_halfplane(a, Point(1, 0), x1, b); a = b; }
-  if (cut_y0) { clip_halfplane(a, Point(0, -1), -y0, b); a = b; }
-  if (cut_y1) { clip_halfplane(a, Point(0, 1), y1, b); a = b; }
+  if (cut_x0) {
+    clip_halfplane(a, Point(-1, 0), -x0, b);
+    a = b;
+  }
+  if (cut_x1) {
+    clip_halfplane(a, Point(1, 0), x1, b);
+    a = b;
+  }
+  if (cut_y0) {
+    clip_halfplane(a, Point(0, -1), -y0, b);
+    a = b;
+  }
+  if (cut_y1) {
+    clip_halfplane(a, Point(0, 1), y1, b);
+    a = b;
+  }
   return area(a);
 }
 

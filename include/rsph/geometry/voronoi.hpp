@@ -50,7 +50,8 @@ namespace detail {
 
 inline void check_sites(const std::vector<Point>& x, const Box<2>& box) {
   for (std::size_t a = 0; a < x.size(); ++a) {
-    if (!x[a].allFinite()) throw InputError("Voronoi cells: particle " + std::to_string(a) + " has a non-finite position");
+    if (!x[a].allFinite())
+      throw InputError("Voronoi cells: particle " + std::to_string(a) + " has a non-finite position");
     for (int k = 0; k < 2; ++k)
       if (box.edge[k] != Edge::open && (x[a][k] < box.lo[k] || x[a][k] > box.hi[k]))
         throw InputError("Voronoi cells: particle " + std::to_string(a) + " lies outside the domain along axis " +
@@ -144,7 +145,8 @@ inline bool needs_more_images(const ConvexPolygon& cell, const Point& xa, const 
   for (int i = 0; i < cell.n; ++i) r2 = std::max(r2, cell[i].squaredNorm());
   const double security = 2.0 * std::sqrt(r2);
   for (int k = 0; k < 2; ++k)
-    if (box.periodic(k) && (xa[k] - security < box.lo[k] - margin || xa[k] + security > box.hi[k] + margin)) return true;
+    if (box.periodic(k) && (xa[k] - security < box.lo[k] - margin || xa[k] + security > box.hi[k] + margin))
+      return true;
   return false;
 }
 
@@ -204,7 +206,8 @@ inline int builder_threads() {
 class LocalVoronoi {
  public:
   template <class Visitor>
-  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, Visitor&& visit) {
+  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
+             Visitor&& visit) {
     detail::check_sites(x, box);
     double margin = 4.0 * detail::mean_spacing(x, box);
     for (int attempt = 0;; ++attempt) {
@@ -214,14 +217,15 @@ class LocalVoronoi {
       bool fits = true;  // cells wider than twice the box: the set is too sparse to mean anything periodic
       for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < 4.0 * (box.hi[k] - box.lo[k]);
       if (!fits || attempt > 12)
-        throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
+        throw NumericalError(
+            "Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
     }
   }
 
  private:
   template <class Visitor>
-  bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, double margin,
-                 Visitor& visit) {
+  bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
+                 double margin, Visitor& visit) {
     const SitesWithImages sites = detail::add_periodic_images(x, box, margin);
     neighbors::CellList<2> cells;
     cells.build(sites.x, detail::mean_spacing(x, box) * 1.5);
@@ -280,7 +284,8 @@ class BoostVoronoi {
   static constexpr double quantization_levels = 1073741824.0;  ///< 2^30 steps over the extent of the points
 
   template <class Visitor>
-  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, Visitor&& visit) {
+  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
+             Visitor&& visit) {
     detail::check_sites(x, box);
     double margin = 4.0 * detail::mean_spacing(x, box);
     for (int attempt = 0;; ++attempt) {
@@ -290,14 +295,15 @@ class BoostVoronoi {
       bool fits = true;  // cells wider than twice the box: the set is too sparse to mean anything periodic
       for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < 4.0 * (box.hi[k] - box.lo[k]);
       if (!fits || attempt > 12)
-        throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
+        throw NumericalError(
+            "Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
     }
   }
 
  private:
   template <class Visitor>
-  bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, double margin,
-                 Visitor& visit) {
+  bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
+                 double margin, Visitor& visit) {
     const SitesWithImages sites = detail::add_periodic_images(x, box, margin);
     const std::size_t n_sites = sites.x.size();
     // Quantize; points that share integer coordinates form one group (Boost keeps one of them).

@@ -12,14 +12,15 @@
 namespace rsph {
 
 struct TimeStepParams {
-  double courant = 0.3;       ///< dt <= courant * h_a / v_sig_a
-  double force = 0.25;        ///< dt <= force * sqrt(h_a / |dv_a/dt|)
+  double courant = 0.3;  ///< dt <= courant * h_a / v_sig_a
+  double force = 0.25;   ///< dt <= force * sqrt(h_a / |dv_a/dt|)
   double dt_max = std::numeric_limits<double>::infinity();
-  double dt_min = 0.0;        ///< a step below this is an error: the run has gone bad
+  double dt_min = 0.0;           ///< a step below this is an error: the run has gone bad
   bool check_every_step = true;  ///< stop with a NumericalError at the first NaN or negative density/energy
 
   void validate() const {
-    require(courant > 0.0 && courant <= 1.0, "time step: Courant factor must lie in (0, 1] (got " + std::to_string(courant) + ")");
+    require(courant > 0.0 && courant <= 1.0,
+            "time step: Courant factor must lie in (0, 1] (got " + std::to_string(courant) + ")");
     require(force > 0.0, "time step: force factor must be positive");
     require(dt_max > 0.0, "time step: dt_max must be positive");
   }

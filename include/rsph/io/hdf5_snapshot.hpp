@@ -20,18 +20,24 @@ class H5File {
     id_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     if (id_ < 0) throw std::runtime_error("cannot create HDF5 file " + path.string());
   }
-  ~H5File() { if (id_ >= 0) H5Fclose(id_); }
+  ~H5File() {
+    if (id_ >= 0) H5Fclose(id_);
+  }
   H5File(const H5File&) = delete;
   H5File& operator=(const H5File&) = delete;
   hid_t id() const { return id_; }
-  void close() { if (id_ >= 0 && H5Fclose(id_) < 0) throw std::runtime_error("HDF5 close failed"); id_ = -1; }
+  void close() {
+    if (id_ >= 0 && H5Fclose(id_) < 0) throw std::runtime_error("HDF5 close failed");
+    id_ = -1;
+  }
 
  private:
   hid_t id_ = -1;
 };
 
 /// rows values (cols == 0) or a rows x cols matrix.
-inline void write_dataset(hid_t file, const std::string& name, const double* data, std::size_t rows, std::size_t cols = 0) {
+inline void write_dataset(hid_t file, const std::string& name, const double* data, std::size_t rows,
+                          std::size_t cols = 0) {
   hsize_t dims[2] = {rows, cols};
   const int rank = cols == 0 ? 1 : 2;
   const hid_t space = H5Screate_simple(rank, dims, nullptr);

@@ -18,13 +18,23 @@ class Json {
     std::string out = "\"";
     for (char c : s) {
       switch (c) {
-        case '"': out += "\\\""; break;
-        case '\\': out += "\\\\"; break;
-        case '\n': out += "\\n"; break;
-        case '\t': out += "\\t"; break;
+        case '"':
+          out += "\\\"";
+          break;
+        case '\\':
+          out += "\\\\";
+          break;
+        case '\n':
+          out += "\\n";
+          break;
+        case '\t':
+          out += "\\t";
+          break;
         default:
-          if (static_cast<unsigned char>(c) < 0x20) out += fmt::format("\\u{:04x}", static_cast<int>(c));
-          else out += c;
+          if (static_cast<unsigned char>(c) < 0x20)
+            out += fmt::format("\\u{:04x}", static_cast<int>(c));
+          else
+            out += c;
       }
     }
     return out + "\"";
@@ -62,7 +72,10 @@ class Json {
  private:
   Json& raw(const std::string& key, std::string value) {
     for (auto& e : entries_)
-      if (e.first == key) { e.second = std::move(value); return *this; }
+      if (e.first == key) {
+        e.second = std::move(value);
+        return *this;
+      }
     entries_.emplace_back(key, std::move(value));
     return *this;
   }

@@ -2,10 +2,10 @@
 // One status line with an ETA on a terminal; silent when stderr is not a terminal.
 #include <fmt/format.h>
 
+#include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <string>
-#include <unistd.h>
 
 namespace rsph::io {
 

@@ -7,28 +7,27 @@ namespace rsph::kernel {
 
 template <int D>
 constexpr double pow_dim(double h) {
-  if constexpr (D == 1) return h;
-  else if constexpr (D == 2) return h * h;
-  else return h * h * h;
+  if constexpr (D == 1)
+    return h;
+  else if constexpr (D == 2)
+    return h * h;
+  else
+    return h * h * h;
 }
 
 /// W(r, h) of eq. (2).
 template <class K, int D>
-  requires SmoothingKernel<K, D>
-inline double W(double r, double h) {
-  return K::template sigma<D>() / pow_dim<D>(h) * K::f(r / h);
-}
+requires SmoothingKernel<K, D>
+inline double W(double r, double h) { return K::template sigma<D>() / pow_dim<D>(h) * K::f(r / h); }
 
 /// dW/dr; the gradient is dW_dr * r_ab / |r_ab|.
 template <class K, int D>
-  requires SmoothingKernel<K, D>
-inline double dW_dr(double r, double h) {
-  return K::template sigma<D>() / (pow_dim<D>(h) * h) * K::df(r / h);
-}
+requires SmoothingKernel<K, D>
+inline double dW_dr(double r, double h) { return K::template sigma<D>() / (pow_dim<D>(h) * h) * K::df(r / h); }
 
 /// nabla_a W_ab for r_ab = x_a - x_b, |r_ab| = r > 0.
 template <class K, int D>
-  requires SmoothingKernel<K, D>
+requires SmoothingKernel<K, D>
 inline Vec<D> grad_W(const Vec<D>& r_ab, double r, double h) {
   if (r <= 0.0) return Vec<D>::Zero();
   return (dW_dr<K, D>(r, h) / r) * r_ab;

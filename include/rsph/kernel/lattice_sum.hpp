@@ -11,7 +11,7 @@ namespace rsph::kernel {
 
 /// dx^D sum over a Cartesian lattice of W(x_j, h), h = h_over_dx * dx (independent of dx).
 template <class K, int D>
-  requires SmoothingKernel<K, D>
+requires SmoothingKernel<K, D>
 double lattice_sum(double h_over_dx) {
   const int reach = static_cast<int>(std::ceil(K::support * h_over_dx)) + 1;
   double sum = 0.0;

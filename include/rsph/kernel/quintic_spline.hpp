@@ -8,9 +8,12 @@ struct QuinticSpline {
   static constexpr double support = 3.0;
   template <int D>
   static constexpr double sigma() {
-    if constexpr (D == 1) return 1.0 / 120.0;
-    else if constexpr (D == 2) return 7.0 / (478.0 * std::numbers::pi);
-    else return 1.0 / (120.0 * std::numbers::pi);
+    if constexpr (D == 1)
+      return 1.0 / 120.0;
+    else if constexpr (D == 2)
+      return 7.0 / (478.0 * std::numbers::pi);
+    else
+      return 1.0 / (120.0 * std::numbers::pi);
   }
   static double f(double q) {
     if (q >= 3.0) return 0.0;

@@ -10,9 +10,12 @@ struct WendlandC2 {
   static constexpr double support = 2.0;
   template <int D>
   static constexpr double sigma() {
-    if constexpr (D == 1) return 3.0 / 4.0;
-    else if constexpr (D == 2) return 7.0 / (4.0 * std::numbers::pi);
-    else return 21.0 / (16.0 * std::numbers::pi);
+    if constexpr (D == 1)
+      return 3.0 / 4.0;
+    else if constexpr (D == 2)
+      return 7.0 / (4.0 * std::numbers::pi);
+    else
+      return 21.0 / (16.0 * std::numbers::pi);
   }
   static double f(double q) {
     if (q >= 2.0) return 0.0;

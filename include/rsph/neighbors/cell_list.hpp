@@ -22,8 +22,14 @@ class CellList {
     const std::size_t n = x.size();
     lo_ = Vec<D>::Constant(std::numeric_limits<double>::max());
     Vec<D> hi = Vec<D>::Constant(std::numeric_limits<double>::lowest());
-    for (const auto& p : x) { lo_ = lo_.cwiseMin(p); hi = hi.cwiseMax(p); }
-    if (n == 0) { lo_.setZero(); hi.setZero(); }
+    for (const auto& p : x) {
+      lo_ = lo_.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+    if (n == 0) {
+      lo_.setZero();
+      hi.setZero();
+    }
     // Cap the cell count near the particle count so sparse or huge domains stay cheap.
     double size = cell_size;
     for (;;) {
@@ -78,8 +84,10 @@ class CellList {
   void for_each_within(const Vec<D>& p, double radius, F&& f) const {
     std::array<std::int64_t, D> lo, hi;
     for (int k = 0; k < D; ++k) {
-      lo[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - radius - lo_[k]) * inv_size_)), 0, dims_[k] - 1);
-      hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)), 0, dims_[k] - 1);
+      lo[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - radius - lo_[k]) * inv_size_)), 0,
+                                       dims_[k] - 1);
+      hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)), 0,
+                                       dims_[k] - 1);
     }
     std::array<std::int64_t, D> idx = lo;
     for (;;) {
@@ -151,7 +159,8 @@ class CellList {
   std::array<std::int64_t, D> coords(const Vec<D>& p) const {
     std::array<std::int64_t, D> c;
     for (int k = 0; k < D; ++k)
-      c[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - lo_[k]) * inv_size_)), 0, dims_[k] - 1);
+      c[k] =
+          std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - lo_[k]) * inv_size_)), 0, dims_[k] - 1);
     return c;
   }
   std::size_t cell_index(const std::array<std::int64_t, D>& c) const {

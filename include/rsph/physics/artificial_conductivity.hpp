@@ -16,7 +16,8 @@ struct ArtificialConductivity {
   double alpha_u = 1.0;
 
   void validate() const {
-    require(alpha_u >= 0.0, "artificial conductivity: alpha_u must be non-negative (got " + std::to_string(alpha_u) + ")");
+    require(alpha_u >= 0.0,
+            "artificial conductivity: alpha_u must be non-negative (got " + std::to_string(alpha_u) + ")");
   }
 
   template <int D>

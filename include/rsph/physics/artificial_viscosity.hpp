@@ -15,9 +15,8 @@ struct ArtificialViscosity {
   double eta2 = 0.01;  ///< eta^2 in mu_ab's denominator, keeps it finite as r -> 0
 
   void validate() const {
-    require(alpha >= 0.0 && beta >= 0.0,
-            "artificial viscosity: alpha and beta must be non-negative (got " + std::to_string(alpha) + ", " +
-                std::to_string(beta) + ")");
+    require(alpha >= 0.0 && beta >= 0.0, "artificial viscosity: alpha and beta must be non-negative (got " +
+                                             std::to_string(alpha) + ", " + std::to_string(beta) + ")");
   }
 
   /// mu_ab = h_ab v_ab . r_ab / (r_ab^2 + eta^2 h_ab^2), Monaghan 1992 eq. 4.2; zero for receding pairs.

@@ -6,15 +6,15 @@ namespace rsph::physics {
 
 template <int D>
 struct Pair {
-  Vec<D> r_ab;     ///< x_a - x_b
-  Vec<D> v_ab;     ///< v_a - v_b
-  Vec<D> grad_W;   ///< nabla_a W(r_ab, h_ab); with grad-h SPH the mean of the two gradients below
+  Vec<D> r_ab;                       ///< x_a - x_b
+  Vec<D> v_ab;                       ///< v_a - v_b
+  Vec<D> grad_W;                     ///< nabla_a W(r_ab, h_ab); with grad-h SPH the mean of the two gradients below
   Vec<D> grad_W_a = Vec<D>::Zero();  ///< grad-h SPH only: nabla_a W(r_ab, h_a)
   Vec<D> grad_W_b = Vec<D>::Zero();  ///< grad-h SPH only: nabla_a W(r_ab, h_b)
-  double r;        ///< |r_ab|
-  double h_ab;     ///< (h_a + h_b) / 2
+  double r;                          ///< |r_ab|
+  double h_ab;                       ///< (h_a + h_b) / 2
   double m_a, m_b, rho_a, rho_b, P_a, P_b, cs_a, cs_b;
-  double u_a = 0.0, u_b = 0.0;  ///< specific internal energies, zero when the gas carries none
+  double u_a = 0.0, u_b = 0.0;          ///< specific internal energies, zero when the gas carries none
   double Omega_a = 1.0, Omega_b = 1.0;  ///< grad-h correction factors, 1 with fixed h
 };
 

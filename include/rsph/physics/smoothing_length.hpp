@@ -14,8 +14,8 @@ namespace rsph::physics {
 template <int D>
 struct GradH {
   static constexpr bool solves_smoothing_length = true;
-  double eta = 1.2;          ///< h = eta (m / rho)^(1/D)
-  double tolerance = 1e-6;   ///< relative change of h at which the iteration stops
+  double eta = 1.2;         ///< h = eta (m / rho)^(1/D)
+  double tolerance = 1e-6;  ///< relative change of h at which the iteration stops
   int max_iterations = 50;
 
   void validate() const {
@@ -28,9 +28,12 @@ struct GradH {
   /// h(rho) = eta (m / rho)^(1/D).
   double h_of_rho(double m, double rho) const {
     const double vol = m / rho;
-    if constexpr (D == 1) return eta * vol;
-    else if constexpr (D == 2) return eta * std::sqrt(vol);
-    else return eta * std::cbrt(vol);
+    if constexpr (D == 1)
+      return eta * vol;
+    else if constexpr (D == 2)
+      return eta * std::sqrt(vol);
+    else
+      return eta * std::cbrt(vol);
   }
 };
 

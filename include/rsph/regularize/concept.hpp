@@ -11,9 +11,9 @@ namespace rsph {
 
 /// What a schedule may look at when deciding whether to regularize.
 struct StepInfo {
-  std::uint64_t step = 0;             ///< steps taken so far
-  double time = 0.0;                  ///< simulated time
-  std::uint64_t steps_since_last = 0; ///< steps since the last regularization (or the start)
+  std::uint64_t step = 0;              ///< steps taken so far
+  double time = 0.0;                   ///< simulated time
+  std::uint64_t steps_since_last = 0;  ///< steps since the last regularization (or the start)
   double time_since_last = 0.0;
   const neighbors::NeighborList* neighbors = nullptr;  ///< current neighbour lists of the real particles
 };
@@ -28,10 +28,17 @@ concept Regularizer = requires(R& r, ParticleSet<D, E>& p, const Box<D>& box, co
 
 template <class R, int D, bool E>
 constexpr bool check_regularizer() {
-  static_assert(requires(R& r, ParticleSet<D, E>& p, const Box<D>& box, const StepInfo& s) { { r.due(p, box, s) } -> std::same_as<bool>; },
-                "a regularizer needs `bool due(const ParticleSet<D, E>&, const Box<D>&, const StepInfo&)`: when to remap");
-  static_assert(requires(R& r, ParticleSet<D, E>& p, const Box<D>& box) { { r.remap(p, box) } -> std::convertible_to<double>; },
-                "a regularizer needs `double remap(ParticleSet<D, E>&, const Box<D>&)`: the remap, returning the kinetic energy removed");
+  static_assert(
+      requires(R & r, ParticleSet<D, E> & p, const Box<D>& box, const StepInfo& s) {
+        { r.due(p, box, s) } -> std::same_as<bool>;
+      },
+      "a regularizer needs `bool due(const ParticleSet<D, E>&, const Box<D>&, const StepInfo&)`: when to remap");
+  static_assert(
+      requires(R & r, ParticleSet<D, E> & p, const Box<D>& box) {
+        { r.remap(p, box) } -> std::convertible_to<double>;
+      },
+      "a regularizer needs `double remap(ParticleSet<D, E>&, const Box<D>&)`: the remap, returning the kinetic energy "
+      "removed");
   return true;
 }
 
@@ -40,9 +47,13 @@ namespace regularize {
 /// Plain SPH: never regularize.
 struct None {
   template <class P, class B>
-  bool due(const P&, const B&, const StepInfo&) const { return false; }
+  bool due(const P&, const B&, const StepInfo&) const {
+    return false;
+  }
   template <class P, class B>
-  double remap(P&, const B&) { return 0.0; }
+  double remap(P&, const B&) {
+    return 0.0;
+  }
 };
 
 }  // namespace regularize

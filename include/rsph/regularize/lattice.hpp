@@ -54,7 +54,9 @@ struct Uniform1D {
     return {{static_cast<std::int64_t>(std::floor((lo[0] - box.lo[0]) / spacing))},
             {static_cast<std::int64_t>(std::floor((hi[0] - box.lo[0]) / spacing))}};
   }
-  Vec<1> site(const Box<1>& box, std::array<std::int64_t, 1> i) const { return Vec<1>(box.lo[0] + (i[0] + 0.5) * spacing); }
+  Vec<1> site(const Box<1>& box, std::array<std::int64_t, 1> i) const {
+    return Vec<1>(box.lo[0] + (i[0] + 0.5) * spacing);
+  }
   std::array<std::int64_t, 1> periods(const Box<1>& box) const {
     if (box.edge[0] == Edge::open) return {0};
     const double n = (box.hi[0] - box.lo[0]) / spacing;

@@ -40,11 +40,8 @@ class LatticeRegularizer {
   }
 
   /// Time left before a time-based schedule fires (absent for step-based ones).
-  double time_until_due(const StepInfo& s) const
-    requires requires(const Schedule& sc) { sc.time_until_due(s); }
-  {
-    return schedule_.time_until_due(s);
-  }
+  double time_until_due(const StepInfo& s) const requires requires(const Schedule& sc) { sc.time_until_due(s); }
+  { return schedule_.time_until_due(s); }
 
   template <int D, bool E>
   double remap(ParticleSet<D, E>& p, const Box<D>& box) {

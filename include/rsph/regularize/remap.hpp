@@ -34,7 +34,7 @@ struct RemapParams {
 /// What one regularization did.
 struct RemapStats {
   std::size_t n_before = 0, n_after = 0;
-  double kinetic_converted = 0.0;   ///< kinetic energy turned into heat (or dissipated, without u)
+  double kinetic_converted = 0.0;    ///< kinetic energy turned into heat (or dissipated, without u)
   double max_volume_mismatch = 0.0;  ///< max over old cells of |sum_n Omega_n^o - V_o| / V_o
   std::size_t dropped_cells = 0;     ///< nearly empty new cells whose share was handed on
 };
@@ -68,8 +68,8 @@ struct Sums {
     for (const auto& [n, omega] : overlaps) {
       const double dm = density * omega;  // eq. (6)
       m[n] += dm;
-      mv[n] += dm * v_o;                  // eq. (8)
-      E[n] += dm * specific_energy;       // eq. (9) plus kinetic energy, so total energy is conserved
+      mv[n] += dm * v_o;             // eq. (8)
+      E[n] += dm * specific_energy;  // eq. (9) plus kinetic energy, so total energy is conserved
       fill[n] += omega;
     }
   }
@@ -161,8 +161,10 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   std::vector<detail::Sums<D>> sums(static_cast<std::size_t>(n_threads));
   for (auto& s : sums) s.resize(n_cells);
   auto specific_energy = [&](std::size_t a) {
-    if constexpr (E) return p.u[a];
-    else return 0.0;
+    if constexpr (E)
+      return p.u[a];
+    else
+      return 0.0;
   };
 
   if constexpr (D == 1) {
@@ -175,22 +177,33 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
     for (std::size_t k = 0; k < n_old; ++k) {
       const std::uint32_t a = order[k];
       const double xa = p.x[a][0];
-      if (box.edge[0] != Edge::open) require(xa >= box.lo[0] && xa <= box.hi[0], "regularization: particle " + std::to_string(a) + " lies outside the domain");
+      if (box.edge[0] != Edge::open)
+        require(xa >= box.lo[0] && xa <= box.hi[0],
+                "regularization: particle " + std::to_string(a) + " lies outside the domain");
       double left, right;
       const double R = params.closing_radius_in_h * p.h[a];
-      if (k > 0) left = 0.5 * (xa + p.x[order[k - 1]][0]);
-      else if (box.periodic(0)) left = 0.5 * (xa + p.x[order[n_old - 1]][0] - L);
-      else if (box.edge[0] == Edge::reflecting) left = box.lo[0];
-      else left = xa - R;
-      if (k + 1 < n_old) right = 0.5 * (xa + p.x[order[k + 1]][0]);
-      else if (box.periodic(0)) right = 0.5 * (xa + p.x[order[0]][0] + L);
-      else if (box.edge[0] == Edge::reflecting) right = box.hi[0];
-      else right = xa + R;
+      if (k > 0)
+        left = 0.5 * (xa + p.x[order[k - 1]][0]);
+      else if (box.periodic(0))
+        left = 0.5 * (xa + p.x[order[n_old - 1]][0] - L);
+      else if (box.edge[0] == Edge::reflecting)
+        left = box.lo[0];
+      else
+        left = xa - R;
+      if (k + 1 < n_old)
+        right = 0.5 * (xa + p.x[order[k + 1]][0]);
+      else if (box.periodic(0))
+        right = 0.5 * (xa + p.x[order[0]][0] + L);
+      else if (box.edge[0] == Edge::reflecting)
+        right = box.hi[0];
+      else
+        right = xa + R;
       if (box.edge[0] == Edge::open) {
         left = std::max(left, xa - R);
         right = std::min(right, xa + R);
       }
-      if (!(right > left)) throw InputError("regularization: particle " + std::to_string(a) + " coincides with another particle");
+      if (!(right > left))
+        throw InputError("regularization: particle " + std::to_string(a) + " coincides with another particle");
       overlaps.clear();
       const auto r = lattice.cells_touching(box, Vec<1>(left), Vec<1>(right));
       for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
@@ -221,7 +234,10 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
 
       std::array<std::int64_t, 2> clamp_to_walls(std::array<std::int64_t, 2> idx) const {
         for (int k = 0; k < 2; ++k)
-          if (box->edge[k] == Edge::reflecting) idx[static_cast<std::size_t>(k)] = std::clamp(idx[static_cast<std::size_t>(k)], (*range)[0][static_cast<std::size_t>(k)], (*range)[1][static_cast<std::size_t>(k)]);
+          if (box->edge[k] == Edge::reflecting)
+            idx[static_cast<std::size_t>(k)] =
+                std::clamp(idx[static_cast<std::size_t>(k)], (*range)[0][static_cast<std::size_t>(k)],
+                           (*range)[1][static_cast<std::size_t>(k)]);
         return idx;
       }
       void restart() {
@@ -246,18 +262,28 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
             if (omega <= 0.0) continue;
             std::int64_t f = (*flat_index)(idx);
             if (f < 0) f = (*flat_index)(clamp_to_walls(idx));  // round-off sliver beyond a wall
-            if (f < 0) throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " + std::to_string(a) + ")");
+            if (f < 0)
+              throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
+                                   std::to_string(a) + ")");
             ov.emplace_back(static_cast<std::size_t>(f), omega);
           }
         const double e_o = [&] {
-          if constexpr (E) return p->u[a];
-          else return 0.0;
+          if constexpr (E)
+            return p->u[a];
+          else
+            return 0.0;
         }();
         (*sums)[static_cast<std::size_t>(thread)].add(ov, p->m[a], p->v[a], e_o, cell_area);
       }
     };
     const std::array<std::array<std::int64_t, 2>, 2> grid{{{range.lo[0], range.lo[1]}, {range.hi[0], range.hi[1]}}};
-    Visitor visitor{&sums, &p, &lattice, &box, &flat, &grid, std::vector<std::vector<std::pair<std::size_t, double>>>(static_cast<std::size_t>(n_threads))};
+    Visitor visitor{&sums,
+                    &p,
+                    &lattice,
+                    &box,
+                    &flat,
+                    &grid,
+                    std::vector<std::vector<std::pair<std::size_t, double>>>(static_cast<std::size_t>(n_threads))};
     builder.build(p.x, box, closing, visitor);
   }
 
@@ -290,7 +316,8 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
     for (int k = 0; k < D; ++k) off[static_cast<std::size_t>(k)] = -1;
     for (;;) {
       std::array<std::int64_t, D> nb;
-      for (int k = 0; k < D; ++k) nb[static_cast<std::size_t>(k)] = idx[static_cast<std::size_t>(k)] + off[static_cast<std::size_t>(k)];
+      for (int k = 0; k < D; ++k)
+        nb[static_cast<std::size_t>(k)] = idx[static_cast<std::size_t>(k)] + off[static_cast<std::size_t>(k)];
       const std::int64_t f = flat(nb);
       if (f >= 0 && keep[static_cast<std::size_t>(f)] && S.fill[static_cast<std::size_t>(f)] > best_fill) {
         best = f;

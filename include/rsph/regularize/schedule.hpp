@@ -19,7 +19,9 @@ struct EveryNSteps {
   std::uint64_t steps = 40;
   void validate() const { require(steps >= 1, "regularization schedule: the step count must be at least 1"); }
   template <class P, class B>
-  bool due(const P&, const B&, const StepInfo& s) { return s.steps_since_last >= steps; }
+  bool due(const P&, const B&, const StepInfo& s) {
+    return s.steps_since_last >= steps;
+  }
 };
 
 /// Every T_reg of simulated time (§2.1, §3.1); the simulation shortens the step that would pass it.
@@ -27,7 +29,9 @@ struct EveryT {
   double period = 1.0;
   void validate() const { require(period > 0.0, "regularization schedule: the period T_reg must be positive"); }
   template <class P, class B>
-  bool due(const P&, const B&, const StepInfo& s) { return s.time_since_last >= period * (1.0 - 1e-12); }
+  bool due(const P&, const B&, const StepInfo& s) {
+    return s.time_since_last >= period * (1.0 - 1e-12);
+  }
   double time_until_due(const StepInfo& s) const { return period - s.time_since_last; }
 };
 
@@ -52,9 +56,12 @@ struct Adaptive {
   /// V(h): the interaction volume of eq. (A2), the kernel's support disc (rod, ball).
   static double interaction_volume(double h) {
     const double R = Kernel::support * h;
-    if constexpr (D == 1) return 2.0 * R;
-    else if constexpr (D == 2) return std::numbers::pi * R * R;
-    else return 4.0 / 3.0 * std::numbers::pi * R * R * R;
+    if constexpr (D == 1)
+      return 2.0 * R;
+    else if constexpr (D == 2)
+      return std::numbers::pi * R * R;
+    else
+      return 4.0 / 3.0 * std::numbers::pi * R * R * R;
   }
 
   /// N_a of eq. (A2) for the real particles, from the current neighbour lists.
@@ -89,7 +96,7 @@ struct Adaptive {
         const std::uint32_t b = nl.index[k];
         mean += p.m[b] / p.rho[b] * N_of(b) * kernel::W<Kernel, D>((p.x[a] - p.x[b]).norm(), 0.5 * (p.h[a] + p.h[b]));
       }
-      const double dN = (N[a] - mean) / N[a];  // eq. (A3)
+      const double dN = (N[a] - mean) / N[a];                     // eq. (A3)
       if (std::abs(dN) > dN_max) return (last_reason = 3), true;  // eq. (A6)
     }
     return false;
