@@ -190,6 +190,25 @@ void run_parallel(std::size_t n, Body&& body) {
 
 }  // namespace detail
 
+namespace detail {
+/// Runs try_build(margin) with periodic images over a margin of 4 mean spacings, doubling it (and
+/// calling visit.restart()) until every cell's security disc is covered.
+template <class Visitor, class TryBuild>
+void build_widening_images(const std::vector<Point>& x, const Box<2>& box, Visitor& visit, TryBuild&& try_build) {
+  check_sites(x, box);
+  double margin = 4.0 * mean_spacing(x, box);
+  for (int attempt = 0;; ++attempt) {
+    if (attempt > 0) visit.restart();
+    if (try_build(margin)) return;
+    margin *= 2.0;
+    bool fits = true;  // cells wider than twice the box: the set is too sparse to mean anything periodic
+    for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < 4.0 * (box.hi[k] - box.lo[k]);
+    if (!fits || attempt > 12)
+      throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
+  }
+}
+}  // namespace detail
+
 /// Number of threads the builders use (visitors keep per-thread state).
 inline int builder_threads() {
 #ifdef _OPENMP
@@ -208,18 +227,8 @@ class LocalVoronoi {
   template <class Visitor>
   void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
              Visitor&& visit) {
-    detail::check_sites(x, box);
-    double margin = 4.0 * detail::mean_spacing(x, box);
-    for (int attempt = 0;; ++attempt) {
-      if (attempt > 0) visit.restart();
-      if (try_build(x, box, closing_radius, margin, visit)) return;
-      margin *= 2.0;
-      bool fits = true;  // cells wider than twice the box: the set is too sparse to mean anything periodic
-      for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < 4.0 * (box.hi[k] - box.lo[k]);
-      if (!fits || attempt > 12)
-        throw NumericalError(
-            "Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
-    }
+    detail::build_widening_images(x, box, visit,
+                                  [&](double margin) { return try_build(x, box, closing_radius, margin, visit); });
   }
 
  private:
@@ -286,18 +295,8 @@ class BoostVoronoi {
   template <class Visitor>
   void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
              Visitor&& visit) {
-    detail::check_sites(x, box);
-    double margin = 4.0 * detail::mean_spacing(x, box);
-    for (int attempt = 0;; ++attempt) {
-      if (attempt > 0) visit.restart();
-      if (try_build(x, box, closing_radius, margin, visit)) return;
-      margin *= 2.0;
-      bool fits = true;  // cells wider than twice the box: the set is too sparse to mean anything periodic
-      for (int k = 0; k < 2; ++k) fits &= !box.periodic(k) || margin < 4.0 * (box.hi[k] - box.lo[k]);
-      if (!fits || attempt > 12)
-        throw NumericalError(
-            "Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
-    }
+    detail::build_widening_images(x, box, visit,
+                                  [&](double margin) { return try_build(x, box, closing_radius, margin, visit); });
   }
 
  private:

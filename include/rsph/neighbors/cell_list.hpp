@@ -65,17 +65,7 @@ class CellList {
       lo[k] = std::max<std::int64_t>(0, c[k] - 1);
       hi[k] = std::min<std::int64_t>(dims_[k] - 1, c[k] + 1);
     }
-    std::array<std::int64_t, D> idx = lo;
-    for (;;) {
-      const std::size_t cell = cell_index(idx);
-      for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s]);
-      int k = 0;
-      for (; k < D; ++k) {
-        if (++idx[k] <= hi[k]) break;
-        idx[k] = lo[k];
-      }
-      if (k == D) break;
-    }
+    for_each_in_block(lo, hi, f);
   }
 
   /// Calls f(j) for every point j in the cells that meet the square of half-width `radius` around p
@@ -89,17 +79,7 @@ class CellList {
       hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)), 0,
                                        dims_[k] - 1);
     }
-    std::array<std::int64_t, D> idx = lo;
-    for (;;) {
-      const std::size_t cell = cell_index(idx);
-      for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s]);
-      int k = 0;
-      for (; k < D; ++k) {
-        if (++idx[k] <= hi[k]) break;
-        idx[k] = lo[k];
-      }
-      if (k == D) break;
-    }
+    for_each_in_block(lo, hi, f);
   }
 
   /// Calls f(j) for every point j in the cells at Chebyshev distance exactly `ring` from p's cell.
@@ -156,6 +136,22 @@ class CellList {
   const std::vector<std::uint32_t>& sorted() const { return sorted_; }
 
  private:
+  // Every point of the cells in the index block [lo, hi] (inclusive, inside the grid).
+  template <class F>
+  void for_each_in_block(const std::array<std::int64_t, D>& lo, const std::array<std::int64_t, D>& hi, F& f) const {
+    std::array<std::int64_t, D> idx = lo;
+    for (;;) {
+      const std::size_t cell = cell_index(idx);
+      for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s]);
+      int k = 0;
+      for (; k < D; ++k) {
+        if (++idx[k] <= hi[k]) break;
+        idx[k] = lo[k];
+      }
+      if (k == D) break;
+    }
+  }
+
   std::array<std::int64_t, D> coords(const Vec<D>& p) const {
     std::array<std::int64_t, D> c;
     for (int k = 0; k < D; ++k)
