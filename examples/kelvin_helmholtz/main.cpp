@@ -41,11 +41,7 @@ int main(int argc, char** argv) {
     ex::apply_threads(common.threads);
     const auto dir = ex::prepare_output(common.out);
     io::Progress progress("rsph-kelvin-helmholtz " + method, s.end_time());
-    bool first = true;
     auto on_step = [&](const auto& sim) {
-      if (first) {
-        first = false;
-      }
       if (!common.quiet) progress.update(sim.time(), sim.steps());
     };
     auto on_end = [&](const auto& sim) {

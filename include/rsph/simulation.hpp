@@ -230,6 +230,8 @@ class Simulation {
         pr.r = pr.r_ab.norm();
         if (pr.r <= 0.0) continue;
         const double h_b = p_.h[b];
+        if constexpr (grad_h)
+          if (pr.r >= Kernel::support * std::max(h_a, h_b)) continue;  // inside the search margin only
         pr.v_ab = p_.v[a] - p_.v[b];
         pr.h_ab = 0.5 * (h_a + h_b);
         pr.m_b = p_.m[b];
@@ -238,7 +240,6 @@ class Simulation {
         pr.cs_b = p_.cs[b];
         pr.u_b = energy_of(b);
         if constexpr (grad_h) {
-          if (pr.r >= Kernel::support * std::max(h_a, h_b)) continue;  // margin of the search only
           pr.grad_W_a = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, h_a);
           pr.grad_W_b = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, h_b);
           pr.grad_W = 0.5 * (pr.grad_W_a + pr.grad_W_b);
@@ -319,39 +320,46 @@ class Simulation {
     const auto& solver = h_solver();
     Omega_.assign(p_.size(), 1.0);
     bool fits = true;
-#pragma omp parallel for schedule(static) reduction(&& : fits)
-    for (std::size_t a = 0; a < n; ++a) {
-      const double m_a = p_.m[a];
-      const double h_search = p_.h[a] * margin;
-      double h = p_.h[a], lo = 0.0, hi = h_search;
-      double rho = 0.0, sum_dW_dh = 0.0;
-      for (int it = 0; it < solver.max_iterations; ++it) {
-        rho = m_a * kernel::W<Kernel, D>(0.0, h);
-        sum_dW_dh = m_a * physics::dW_dh<Kernel, D>(0.0, h);
-        const double r_max = Kernel::support * h;
+#pragma omp parallel reduction(&& : fits)
+    {
+      std::vector<std::pair<double, double>> r_m;  // (r_ab, m_b) of the candidates, computed once per particle
+#pragma omp for schedule(static)
+      for (std::size_t a = 0; a < n; ++a) {
+        const double m_a = p_.m[a];
+        const double h_search = p_.h[a] * margin;
+        r_m.clear();
         for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
           const std::uint32_t b = nl_.index[k];
-          const double r = (p_.x[a] - p_.x[b]).norm();
-          if (r >= r_max) continue;
-          rho += p_.m[b] * kernel::W<Kernel, D>(r, h);
-          sum_dW_dh += p_.m[b] * physics::dW_dh<Kernel, D>(r, h);
+          r_m.emplace_back((p_.x[a] - p_.x[b]).norm(), p_.m[b]);
         }
-        const double rho_h = solver.rho_of_h(m_a, h);
-        const double f = rho - rho_h;
-        if (std::abs(f) <= solver.tolerance * rho_h) break;
-        if (f > 0.0)
-          hi = h;
-        else
-          lo = h;  // f rises with h: rho_h falls as h^-D
-        const double df = sum_dW_dh + D * rho_h / h;
-        double next = df != 0.0 ? h - f / df : 0.5 * (lo + hi);
-        if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-        h = next;
+        double h = p_.h[a], lo = 0.0, hi = h_search;
+        double rho = 0.0, sum_dW_dh = 0.0;
+        for (int it = 0; it < solver.max_iterations; ++it) {
+          rho = m_a * kernel::W<Kernel, D>(0.0, h);
+          sum_dW_dh = m_a * physics::dW_dh<Kernel, D>(0.0, h);
+          const double r_max = Kernel::support * h;
+          for (const auto& [r, m_b] : r_m) {
+            if (r >= r_max) continue;
+            rho += m_b * kernel::W<Kernel, D>(r, h);
+            sum_dW_dh += m_b * physics::dW_dh<Kernel, D>(r, h);
+          }
+          const double rho_h = solver.rho_of_h(m_a, h);
+          const double f = rho - rho_h;
+          if (std::abs(f) <= solver.tolerance * rho_h) break;
+          if (f > 0.0)
+            hi = h;
+          else
+            lo = h;  // f rises with h: rho_h falls as h^-D
+          const double df = sum_dW_dh + D * rho_h / h;
+          double next = df != 0.0 ? h - f / df : 0.5 * (lo + hi);
+          if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+          h = next;
+        }
+        p_.h[a] = h;
+        p_.rho[a] = rho;
+        Omega_[a] = physics::omega<D>(h, rho, sum_dW_dh);
+        if (h >= h_search * (1.0 - 1e-12)) fits = false;
       }
-      p_.h[a] = h;
-      p_.rho[a] = rho;
-      Omega_[a] = physics::omega<D>(h, rho, sum_dW_dh);
-      if (h >= h_search * (1.0 - 1e-12)) fits = false;
     }
     return fits;
   }

@@ -11,13 +11,11 @@ using RSPH = Simulation<2, Kernel, eos::IdealGas,
                         regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<Kernel, 2>>>;
 
 // A periodic lattice of spacing scale * Delta, with h = 1.2 Delta: scale < 1 compresses, > 1 expands.
-ParticleSet<2, true> scaled_lattice(int n, double scale, bool half_only = false) {
+ParticleSet<2, true> scaled_lattice(int n, double scale) {
   ParticleSet<2, true> p;
   const double dx = 1.0 / n;
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
-      const double s = (half_only && i < n / 2) ? 1.0 : scale;
-      (void)s;
       p.add(dx * dx, Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), 1.2 * dx / scale, 1.0);
     }
   return p;

@@ -177,9 +177,8 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
     for (std::size_t k = 0; k < n_old; ++k) {
       const std::uint32_t a = order[k];
       const double xa = p.x[a][0];
-      if (box.edge[0] != Edge::open)
-        require(xa >= box.lo[0] && xa <= box.hi[0],
-                "regularization: particle " + std::to_string(a) + " lies outside the domain");
+      if (box.edge[0] != Edge::open && (xa < box.lo[0] || xa > box.hi[0]))  // message built only on failure
+        throw InputError("regularization: particle " + std::to_string(a) + " lies outside the domain");
       double left, right;
       const double R = params.closing_radius_in_h * p.h[a];
       if (k > 0)
