@@ -3,12 +3,11 @@
 // lattice sheared as by Keplerian rotation. items_per_second = old particles per second.
 #include "rsph/rsph.hpp"
 
+#include "bench_common.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include <random>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 using namespace rsph;
 
@@ -43,17 +42,9 @@ Box<2> domain() {
   return b;
 }
 
-void set_threads(const benchmark::State& state) {
-#ifdef _OPENMP
-  omp_set_num_threads(state.range(2) == 0 ? omp_get_num_procs() : static_cast<int>(state.range(2)));
-#else
-  (void)state;
-#endif
-}
-
 template <class Builder>
 void BM_cells(benchmark::State& state) {
-  set_threads(state);
+  bench::use_threads(state);
   const auto p = make_set(state.range(0), static_cast<int>(state.range(1)));
   Builder builder;
   double total = 0.0;
@@ -67,7 +58,7 @@ void BM_cells(benchmark::State& state) {
 }
 
 void BM_remap(benchmark::State& state) {
-  set_threads(state);
+  bench::use_threads(state);
   const auto p0 = make_set(state.range(0), static_cast<int>(state.range(1)));
   const double dx = 1.0 / std::lround(std::sqrt(static_cast<double>(p0.n_real)));
   geometry::LocalVoronoi builder;

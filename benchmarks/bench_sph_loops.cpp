@@ -2,14 +2,13 @@
 // Reported as particle updates per second (items_per_second), serial and with all threads.
 #include "rsph/rsph.hpp"
 
+#include "bench_common.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include <cmath>
 #include <memory>
 #include <random>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 using namespace rsph;
 
@@ -34,19 +33,10 @@ std::unique_ptr<Sim> make_lattice(std::int64_t n_particles, double h_over_dx) {
                                physics::ArtificialViscosity{1.0, 2.0});
 }
 
-int threads_for(const benchmark::State& state) {
-  int t = static_cast<int>(state.range(2));
-#ifdef _OPENMP
-  if (t == 0) t = omp_get_num_procs();
-  omp_set_num_threads(t);
-#endif
-  return t;
-}
-
 template <bool Forces>
 void BM_loop(benchmark::State& state) {
   const double h_over_dx = static_cast<double>(state.range(1)) / 10.0;
-  const int threads = threads_for(state);
+  const int threads = bench::use_threads(state);
   auto sim = make_lattice(state.range(0), h_over_dx);
   for (auto _ : state) {
     if constexpr (Forces)
@@ -65,7 +55,7 @@ void BM_density(benchmark::State& s) { BM_loop<false>(s); }
 void BM_forces(benchmark::State& s) { BM_loop<true>(s); }
 
 void BM_all_rates(benchmark::State& state) {
-  const int threads = threads_for(state);
+  const int threads = bench::use_threads(state);
   auto sim = make_lattice(state.range(0), static_cast<double>(state.range(1)) / 10.0);
   for (auto _ : state) sim->compute_rates();  // ghosts, cell list, neighbour lists, density and forces
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(sim->particles().n_real));

@@ -5,8 +5,6 @@ rsph-kelvin-helmholtz output folders.
 Usage: plot_kelvin_helmholtz.py DIR [DIR ...] --png FILE
 """
 import argparse
-import csv
-import json
 import math
 import os
 
@@ -15,6 +13,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from rsph_plot import read_csv, read_summary  # noqa: E402
 
 
 def main():
@@ -27,8 +26,7 @@ def main():
     grid = fig.add_gridspec((n + 1) // 2 + 1, 2)
     amp_ax = fig.add_subplot(grid[-1, :])
     for i, d in enumerate(args.dirs):
-        with open(os.path.join(d, "summary.json")) as f:
-            s = json.load(f)
+        s = read_summary(d)
         label = f"{s['method'].upper()}, alpha_u = {s['alpha_u']:g}"
         ax = fig.add_subplot(grid[i // 2, i % 2])
         with h5py.File(os.path.join(d, "snap_00001.h5"), "r") as h:
@@ -42,9 +40,8 @@ def main():
         ax.set_aspect("equal")
         ax.set_title(f"{label}: t = {t:.2f}, {s['particles']} particles, {s['wall_seconds']:.0f} s", fontsize=9)
         fig.colorbar(sc, ax=ax, fraction=0.025)
-        with open(os.path.join(d, "amplitude.csv")) as f:
-            rows = list(csv.DictReader(f))
-        amp_ax.plot([float(r["time"]) for r in rows], [float(r["amplitude"]) for r in rows], label=label)
+        amp = read_csv(os.path.join(d, "amplitude.csv"))
+        amp_ax.plot(amp["time"], amp["amplitude"], label=label)
         tau = s["tau_KH"]
     sigma = 2 * math.pi / tau
     t_lin = [0.05 * tau, 0.6 * tau]

@@ -4,21 +4,13 @@
 Usage: plot_sod.py OUT_DIR [OUT_DIR ...] --png FILE
 """
 import argparse
-import csv
-import json
 import os
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-
-def read_csv(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]}
+from rsph_plot import read_csv, read_summary  # noqa: E402
 
 
 def main():
@@ -30,8 +22,7 @@ def main():
     for row, d in zip(axes, args.dirs):
         parts = read_csv(os.path.join(d, "particles.csv"))
         exact = read_csv(os.path.join(d, "exact.csv"))
-        with open(os.path.join(d, "summary.json")) as f:
-            s = json.load(f)
+        s = read_summary(d)
         for ax, key, label, err in zip(row, ["rho", "v", "P"], [r"$\rho$", "$v_x$", "$P$"], ["L1_rho", "L1_v", "L1_P"]):
             ax.plot(parts["x"], parts[key], ".", ms=2, color="tab:blue", label="SPH particles")
             ax.plot(exact["x"], exact[key], "-", lw=1, color="k", label="exact")

@@ -5,20 +5,13 @@ rsph-strong-shock output folders, and accuracy against cost.
 Usage: plot_strong_shock.py DIR [DIR ...] --png FILE
 """
 import argparse
-import csv
-import json
 import os
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-
-
-def read(path):
-    with open(path) as f:
-        rows = list(csv.DictReader(f))
-    return {k: [float(r[k]) for r in rows] for k in rows[0]}
+from rsph_plot import read_csv, read_summary  # noqa: E402
 
 
 def main():
@@ -27,13 +20,12 @@ def main():
     ap.add_argument("--png", required=True)
     args = ap.parse_args()
     fig, (a_rho, a_v, a_cost) = plt.subplots(1, 3, figsize=(16, 4.5))
-    exact = read(os.path.join(args.dirs[0], "exact.csv"))
+    exact = read_csv(os.path.join(args.dirs[0], "exact.csv"))
     a_rho.plot(exact["x"], exact["rho"], "k-", lw=1, label="exact")
     a_v.plot(exact["x"], exact["v"], "k-", lw=1, label="exact")
     for d in args.dirs:
-        with open(os.path.join(d, "summary.json")) as f:
-            s = json.load(f)
-        p = read(os.path.join(d, "particles.csv"))
+        s = read_summary(d)
+        p = read_csv(os.path.join(d, "particles.csv"))
         label = f"{s['method'].upper()} a={s['alpha']:g} b={s['beta']:g} ({s['particles']} particles)"
         a_rho.plot(p["x"], p["rho"], ".", ms=1.5, label=label)
         a_v.plot(p["x"], p["v"], ".", ms=1.5, label=label)

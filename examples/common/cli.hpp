@@ -55,6 +55,13 @@ inline bool parse(int argc, char** argv, const po::options_description& desc, po
   return true;
 }
 
+/// Whether --preset asked for the quick run; an unknown preset is an input error.
+inline bool quick_preset(const CommonOptions& common) {
+  if (common.preset != "quick" && common.preset != "paper")
+    throw InputError("unknown preset '" + common.preset + "' (quick, paper)");
+  return common.preset == "quick";
+}
+
 inline void apply_threads(int threads) {
 #ifdef _OPENMP
   if (threads > 0) omp_set_num_threads(threads);

@@ -53,10 +53,8 @@ int main(int argc, char** argv) {
             "rsph-drifting-pulse: a square pulse drifting through a periodic 1D lattice, regularized every T_reg.\n"
             "Usage: rsph-drifting-pulse [--shifts 0.01,0.1,0.5,1.0] [--counts 0,100,...] [--out DIR]"))
       return 0;
-    if (common.preset == "quick") {
+    if (ex::quick_preset(common)) {
       if (vm["counts"].defaulted()) counts_text = "0,10,20,30,40";
-    } else if (common.preset != "paper") {
-      throw InputError("unknown preset '" + common.preset + "' (quick, paper)");
     }
     ex::apply_threads(common.threads);
     const auto shifts = parse_list(shifts_text, "--shifts");

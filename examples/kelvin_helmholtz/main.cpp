@@ -31,10 +31,8 @@ int main(int argc, char** argv) {
                    "rsph-kelvin-helmholtz: Kelvin-Helmholtz instability at density ratio 10.\n"
                    "Usage: rsph-kelvin-helmholtz --method rsph|sph [--conductivity 1] [--out DIR]"))
       return 0;
-    if (common.preset == "quick") {
+    if (ex::quick_preset(common)) {
       if (vm["cells"].defaulted()) s.cells = 64;
-    } else if (common.preset != "paper") {
-      throw InputError("unknown preset '" + common.preset + "' (quick, paper)");
     }
     if (method != "rsph" && method != "sph") throw InputError("unknown method '" + method + "' (rsph, sph)");
     s.validate();

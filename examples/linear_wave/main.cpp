@@ -34,11 +34,9 @@ int main(int argc, char** argv) {
                    "rsph-linear-wave: an isothermal sound wave in a periodic 2 x 0.5 wavelength box.\n"
                    "Usage: rsph-linear-wave [--wavelength 24] [--r 4.25 | --r 0 --alpha 0.1] [--out DIR]"))
       return 0;
-    if (common.preset == "quick") {
+    if (ex::quick_preset(common)) {
       if (vm["periods"].defaulted()) s.periods = 20;
       if (vm["wavelength"].defaulted()) s.wavelength_cells = 12;
-    } else if (common.preset != "paper") {
-      throw InputError("unknown preset '" + common.preset + "' (quick, paper)");
     }
     s.validate();
     ex::apply_threads(common.threads);

@@ -120,11 +120,9 @@ int main(int argc, char** argv) {
                    "rsph-sod: Sod's shock tube with plain SPH against the exact solution.\n"
                    "Usage: rsph-sod [--dim 1|2] [--preset quick|paper] [--out DIR] ..."))
       return 0;
-    if (opt.common.preset == "quick") {
+    if (ex::quick_preset(opt.common)) {
       if (vm["n-left"].defaulted()) opt.sod.n_left = 200;
       if (vm["snapshots"].defaulted()) opt.snapshots = 2;
-    } else if (opt.common.preset != "paper") {
-      throw InputError("unknown preset '" + opt.common.preset + "' (quick, paper)");
     }
     ex::apply_threads(opt.common.threads);
     if (opt.dim == 1) return run_kernel<1>(opt);

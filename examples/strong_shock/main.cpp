@@ -38,15 +38,13 @@ int main(int argc, char** argv) {
                    "rsph-strong-shock: (rho, v, P) = (1, 0, 1e10) | (0.125, 0, 0.1), gamma = 1.4, t = 2.5e-6.\n"
                    "Usage: rsph-strong-shock --method rsph|sph [--alpha 2 --beta 4] [--out DIR]"))
       return 0;
-    if (common.preset == "quick") {
+    if (ex::quick_preset(common)) {
       if (vm["nx"].defaulted()) s.nx = 256;
       if (vm["ny"].defaulted()) s.ny = 6;
       if (vm["sph-left"].defaulted()) s.sph_nx_left = 400;
       if (vm["sph-left-rows"].defaulted()) s.sph_ny_left = 16;
       if (vm["sph-right"].defaulted()) s.sph_nx_right = 50;
       if (vm["sph-right-rows"].defaulted()) s.sph_ny_right = 2;
-    } else if (common.preset != "paper") {
-      throw InputError("unknown preset '" + common.preset + "' (quick, paper)");
     }
     s.validate();
     ex::apply_threads(common.threads);

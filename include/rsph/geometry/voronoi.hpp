@@ -207,6 +207,20 @@ void build_widening_images(const std::vector<Point>& x, const Box<2>& box, Visit
       throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
   }
 }
+
+/// The public face of both builders: build(x, box, closing_radius, visit) runs the builder's
+/// try_build(x, box, closing_radius, margin, visit) with images widened until they suffice.
+template <class Builder>
+class WideningBuilder {
+ public:
+  template <class Visitor>
+  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
+             Visitor&& visit) {
+    auto& self = static_cast<Builder&>(*this);
+    build_widening_images(x, box, visit,
+                          [&](double margin) { return self.try_build(x, box, closing_radius, margin, visit); });
+  }
+};
 }  // namespace detail
 
 /// Number of threads the builders use (visitors keep per-thread state).
@@ -222,16 +236,9 @@ inline int builder_threads() {
 /// relative to x[a]; particles of one thread arrive in increasing order. When periodic images turn out
 /// too few (a cell reaches past them), the builder widens them and starts again, calling
 /// visit.restart() first: a visitor must then forget what it was given.
-class LocalVoronoi {
- public:
-  template <class Visitor>
-  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
-             Visitor&& visit) {
-    detail::build_widening_images(x, box, visit,
-                                  [&](double margin) { return try_build(x, box, closing_radius, margin, visit); });
-  }
-
+class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
  private:
+  friend class detail::WideningBuilder<LocalVoronoi>;
   template <class Visitor>
   bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
                  double margin, Visitor& visit) {
@@ -288,18 +295,12 @@ class LocalVoronoi {
 
 /// Boost.Polygon builder: Voronoi neighbours from construct_voronoi on quantized positions, cells cut
 /// in double precision. Same visitor protocol as LocalVoronoi.
-class BoostVoronoi {
+class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
  public:
   static constexpr double quantization_levels = 1073741824.0;  ///< 2^30 steps over the extent of the points
 
-  template <class Visitor>
-  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
-             Visitor&& visit) {
-    detail::build_widening_images(x, box, visit,
-                                  [&](double margin) { return try_build(x, box, closing_radius, margin, visit); });
-  }
-
  private:
+  friend class detail::WideningBuilder<BoostVoronoi>;
   template <class Visitor>
   bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
                  double margin, Visitor& visit) {
