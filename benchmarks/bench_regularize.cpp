@@ -8,6 +8,7 @@
 #include <benchmark/benchmark.h>
 
 #include <random>
+#include <string>
 
 using namespace rsph;
 
@@ -74,17 +75,29 @@ void BM_remap(benchmark::State& state) {
   state.SetComplexityN(static_cast<std::int64_t>(p0.n_real));
 }
 
-// {particles, layout (0 jittered, 1 sheared), threads (0: all)}
-void sizes(benchmark::internal::Benchmark* b) {
+// One family per (layout, threads), so each complexity fit sees one scaling curve in N.
+// Arguments: {particles, layout (0 jittered, 1 sheared), threads (0: all)}.
+template <class Fn>
+void register_family(const std::string& name, Fn fn) {
   for (int layout : {jittered, sheared})
-    for (int t : {1, 0})
+    for (int t : {1, 0}) {
+      const std::string family =
+          name + (layout == jittered ? "/jittered" : "/sheared") + (t == 1 ? "/1thread" : "/allthreads");
+      auto* b = benchmark::RegisterBenchmark(family.c_str(), fn);
       for (std::int64_t n : {1000, 10000, 100000, 1000000}) b->Args({n, layout, t});
-  b->Unit(benchmark::kMillisecond)->UseRealTime()->Complexity(benchmark::oN);
+      b->Unit(benchmark::kMillisecond)->UseRealTime()->Complexity(benchmark::oN);
+    }
 }
 
 }  // namespace
 
-BENCHMARK_TEMPLATE(BM_cells, geometry::LocalVoronoi)->Apply(sizes);
-BENCHMARK_TEMPLATE(BM_cells, geometry::BoostVoronoi)->Apply(sizes);
-BENCHMARK(BM_remap)->Apply(sizes);
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  register_family("cells_local", BM_cells<geometry::LocalVoronoi>);
+  register_family("cells_boost_polygon", BM_cells<geometry::BoostVoronoi>);
+  register_family("remap", BM_remap);
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}
