@@ -29,6 +29,7 @@
 #include "rsph/physics/concept.hpp"
 #include "rsph/physics/hydro.hpp"
 #include "rsph/physics/point_mass.hpp"
+#include "rsph/physics/shear_viscosity.hpp"
 #include "rsph/physics/smoothing_length.hpp"
 #include "rsph/regularize/concept.hpp"
 #include "rsph/regularize/lattice.hpp"

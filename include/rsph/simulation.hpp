@@ -14,6 +14,7 @@
 #include "rsph/neighbors/neighbor_list.hpp"
 #include "rsph/physics/concept.hpp"
 #include "rsph/physics/hydro.hpp"
+#include "rsph/physics/shear_viscosity.hpp"
 #include "rsph/physics/smoothing_length.hpp"
 #include "rsph/regularize/concept.hpp"
 
@@ -52,6 +53,9 @@ class Simulation {
   static constexpr bool grad_h = (SmoothingLengthSolver<Terms> || ...);
   static_assert((int(SmoothingLengthSolver<Terms>) + ... + 0) <= 1,
                 "a simulation takes at most one smoothing-length solver");
+  /// A viscous stress term (Navier-Stokes) adds a velocity-gradient pass before the force sum.
+  static constexpr bool has_stress = (StressTerm<Terms, D> || ...);
+  static_assert((int(StressTerm<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one viscous stress term");
   using Particles = ParticleSet<D, has_energy>;
   using KernelType = Kernel;
 
@@ -184,8 +188,40 @@ class Simulation {
       times_.density += seconds_since(t0);
     }
     auto t0 = clock::now();
+    if constexpr (has_stress) compute_stress();
     compute_forces();
     times_.forces += seconds_since(t0);
+  }
+
+  /// The viscous stress over rho^2 of every particle (ghosts mirrored) from the velocity gradients
+  /// (Flebbe et al. 1994 eq. 13), over current neighbour lists and densities.
+  void compute_stress() requires has_stress {
+    const std::size_t n = p_.n_real;
+    const auto& term = std::get<stress_index()>(terms_);
+    S_over_rho2_.resize(p_.size());
+#pragma omp parallel for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) {
+      Mat<D> rho_G = Mat<D>::Zero();
+      for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+        const std::uint32_t b = nl_.index[k];
+        const Vec<D> r_ab = p_.x[a] - p_.x[b];
+        const double r = r_ab.norm();
+        if (r <= 0.0) continue;
+        if constexpr (grad_h)
+          if (r >= Kernel::support * std::max(p_.h[a], p_.h[b])) continue;
+        rho_G += physics::velocity_gradient_term<D>(p_.m[b], p_.v[a] - p_.v[b], pair_grad_W(r_ab, r, p_.h[a], p_.h[b]));
+      }
+      const double rho = p_.rho[a];
+      S_over_rho2_[a] = term.stress(rho_G / rho, rho) / (rho * rho);
+    }
+    // A mirror ghost sees the stress reflected: S' = M S M with M = diag(+-1).
+    for (std::size_t g = n; g < p_.size(); ++g) {
+      const std::size_t src = p_.ghost_source[g - n];
+      Vec<D> sign = Vec<D>::Ones();
+      for (int k = 0; k < D; ++k)
+        if (box_.edge[k] == Edge::reflecting && p_.x[g][k] != p_.x[src][k]) sign[k] = -1.0;
+      S_over_rho2_[g] = sign.asDiagonal() * S_over_rho2_[src] * sign.asDiagonal();
+    }
   }
 
   /// The density sum alone (eq. 2) with P and c_s, over current neighbour lists; for benchmarks.
@@ -252,7 +288,12 @@ class Simulation {
           if constexpr (has_energy) du += physics::pressure_heating(pr);
         }
         std::apply([&](const auto&... term) { (add_pair_term(term, pr, dv, du, v_sig), ...); }, terms_);
+        if constexpr (has_stress) {
+          dv += physics::stress_acceleration<D>(pr.m_b, S_over_rho2_[a], S_over_rho2_[b], pr.grad_W);
+          if constexpr (has_energy) du += physics::stress_heating<D>(pr.m_b, S_over_rho2_[a], pr.v_ab, pr.grad_W);
+        }
       }
+      if constexpr (has_stress) v_sig = std::max(v_sig, std::get<stress_index()>(terms_).signal_speed(h_a));
       std::apply([&](const auto&... term) { (add_body_force(term, p_.x[a], dv), ...); }, terms_);
       p_.dv_dt[a] = dv;
       if constexpr (has_energy) p_.du_dt[a] = du;
@@ -294,6 +335,20 @@ class Simulation {
     return found;
   }
   const auto& h_solver() const { return std::get<solver_index()>(terms_); }
+
+  static constexpr std::size_t stress_index() {
+    std::size_t i = 0, found = 0;
+    ((StressTerm<Terms, D> ? (found = i, ++i) : ++i), ...);
+    return found;
+  }
+
+  /// nabla_a W of a pair as the force sum uses it: at h_ab, or the mean of both h in grad-h SPH.
+  static Vec<D> pair_grad_W(const Vec<D>& r_ab, double r, double h_a, double h_b) {
+    if constexpr (grad_h)
+      return 0.5 * (kernel::grad_W<Kernel, D>(r_ab, r, h_a) + kernel::grad_W<Kernel, D>(r_ab, r, h_b));
+    else
+      return kernel::grad_W<Kernel, D>(r_ab, r, 0.5 * (h_a + h_b));
+  }
 
   void build_neighbors(double margin) {
     const auto t0 = clock::now();
@@ -454,7 +509,8 @@ class Simulation {
   neighbors::NeighborList nl_;
   std::vector<double> v_sig_;
   std::vector<double> h_scratch_;
-  std::vector<double> Omega_;  ///< grad-h factors (real and ghosts), only with a smoothing-length solver
+  std::vector<double> Omega_;        ///< grad-h factors (real and ghosts), only with a smoothing-length solver
+  std::vector<Mat<D>> S_over_rho2_;  ///< viscous stress / rho^2 (real and ghosts), only with a stress term
   std::vector<Vec<D>> v_half_;
   typename Particles::EnergyField u_half_;
   double time_ = 0.0;

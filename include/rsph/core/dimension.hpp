@@ -11,6 +11,10 @@ namespace rsph {
 template <int D>
 using Vec = Eigen::Matrix<double, D, 1>;
 
+/// Fixed-size D x D tensor (velocity gradients, viscous stresses).
+template <int D>
+using Mat = Eigen::Matrix<double, D, D>;
+
 template <int D>
 concept SupportedDimension = (D == 1 || D == 2 || D == 3);
 

@@ -15,6 +15,14 @@ concept PairTerm = requires(const T& t, const physics::Pair<D>& pair) {
   { t.pair(pair) } -> std::same_as<physics::PairRates<D>>;
 };
 
+/// A stress built from each particle's velocity gradient (Navier-Stokes viscosity); the driver runs a
+/// gradient pass before the force sum when a scene names one.
+template <class T, int D>
+concept StressTerm = requires(const T& t, const Mat<D>& grad_v, double rho, double h) {
+  { t.stress(grad_v, rho) } -> std::same_as<Mat<D>>;
+  { t.signal_speed(h) } -> std::same_as<double>;
+};
+
 /// An external acceleration g(x, t) per particle (point-mass gravity).
 template <class T, int D>
 concept BodyForce = requires(const T& t, const Vec<D>& x, double time) {
@@ -37,13 +45,15 @@ concept PrescribedMotion = requires(const T& t, std::size_t i, Vec<D>& x, Vec<D>
 };
 
 template <class T, int D>
-concept Term = PairTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> || PrescribedMotion<T, D>;
+concept Term =
+    PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> || PrescribedMotion<T, D>;
 
 template <class T, int D>
 constexpr bool check_term() {
   static_assert(Term<T, D>,
                 "a physics term must provide one of: `PairRates<D> pair(const Pair<D>&) const` (pair term), "
-                "`Vec<D> acceleration(const Vec<D>& x, double t) const` (body force), "
+                "`Mat<D> stress(const Mat<D>& grad_v, double rho) const` with `double signal_speed(double h) const` "
+                "(viscous stress), `Vec<D> acceleration(const Vec<D>& x, double t) const` (body force), "
                 "`solves_smoothing_length` with `rho_of_h` and `h_of_rho` (adaptive h), or "
                 "`void prescribe(size_t i, Vec<D>& x, Vec<D>& v, double t) const` (prescribed motion)");
   return true;
