@@ -2,6 +2,7 @@
 import csv
 import json
 import os
+import subprocess
 
 
 def read_csv(path):
@@ -14,3 +15,22 @@ def read_csv(path):
 def read_summary(folder):
     with open(os.path.join(folder, "summary.json")) as f:
         return json.load(f)
+
+
+def floats(text):
+    """A comma-separated list of numbers."""
+    return [float(x) for x in text.split(",") if x]
+
+
+def run_example(binary, out, args, rerun=True):
+    """Runs one example on one thread into `out` and returns its summary; with rerun=False a run whose
+    summary.json exists is not repeated."""
+    summary = os.path.join(out, "summary.json")
+    if not rerun and os.path.exists(summary):
+        return read_summary(out)
+    os.makedirs(out, exist_ok=True)
+    cmd = [binary, "--out", out, "--quiet", "--threads", "1"] + [str(a) for a in args]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr}")
+    return read_summary(out)

@@ -11,9 +11,7 @@ Examples:
 import argparse
 import concurrent.futures as cf
 import csv
-import json
 import os
-import subprocess
 import sys
 
 import matplotlib
@@ -21,22 +19,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from rsph_plot import floats, run_example  # noqa: E402
+
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BIN = os.path.join(HERE, "..", "build", "bin", "rsph-linear-wave")
-
-
-def floats(text):
-    return [float(x) for x in text.split(",") if x]
-
-
-def run(binary, out, args):
-    os.makedirs(out, exist_ok=True)
-    cmd = [binary, "--out", out, "--quiet", "--threads", "1"] + [str(a) for a in args]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr}")
-    with open(os.path.join(out, "summary.json")) as f:
-        return json.load(f)
 
 
 def main():
@@ -77,7 +64,7 @@ def main():
         futures = {}
         for kind, setting, lam, a in jobs:
             sub = os.path.join(args.out, kind, setting.replace(" ", "_").replace("/", ""), f"lambda_{lam}")
-            futures[pool.submit(run, args.binary, sub, a)] = (kind, setting, lam)
+            futures[pool.submit(run_example, args.binary, sub, a)] = (kind, setting, lam)
         for fut in cf.as_completed(futures):
             kind, setting, lam = futures[fut]
             s = fut.result()

@@ -4,6 +4,7 @@
 #include "rsph/io/csv.hpp"
 #include "rsph/io/json.hpp"
 
+#include <array>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -16,10 +17,16 @@ class ConservationLog {
  public:
   explicit ConservationLog(const std::filesystem::path& path) : csv_(path, columns()) {}
   void record(double time, std::uint64_t step, const Conservation<D>& c) {
-    std::vector<double> row{time, static_cast<double>(step), c.mass};
-    for (int k = 0; k < D; ++k) row.push_back(c.momentum[k]);
-    row.insert(row.end(), {c.angular_momentum, c.kinetic, c.thermal, c.total_energy()});
-    csv_.row(row);
+    std::array<double, 7 + D> row;  // fixed size: no reallocation for GCC 12's overflow checker to misread
+    row[0] = time;
+    row[1] = static_cast<double>(step);
+    row[2] = c.mass;
+    for (int k = 0; k < D; ++k) row[static_cast<std::size_t>(3 + k)] = c.momentum[k];
+    row[3 + D] = c.angular_momentum;
+    row[4 + D] = c.kinetic;
+    row[5 + D] = c.thermal;
+    row[6 + D] = c.total_energy();
+    csv_.row(std::vector<double>(row.begin(), row.end()));
   }
   void close() { csv_.close(); }
 

@@ -3,6 +3,7 @@
 // the rsph::io target (HDF5, fmt).
 #include "rsph/analysis/riemann.hpp"
 #include "rsph/analysis/shock_tube.hpp"
+#include "rsph/analysis/viscous_ring.hpp"
 #include "rsph/boundary/frozen.hpp"
 #include "rsph/boundary/ghosts.hpp"
 #include "rsph/core/diagnostics.hpp"

@@ -194,14 +194,14 @@ class Simulation {
   }
 
   /// The viscous stress over rho^2 of every particle (ghosts mirrored) from the velocity gradients
-  /// (Flebbe et al. 1994 eq. 13), over current neighbour lists and densities.
+  /// (physics/shear_viscosity.hpp), over current neighbour lists and densities.
   void compute_stress() requires has_stress {
     const std::size_t n = p_.n_real;
     const auto& term = std::get<stress_index()>(terms_);
     S_over_rho2_.resize(p_.size());
 #pragma omp parallel for schedule(static)
     for (std::size_t a = 0; a < n; ++a) {
-      Mat<D> rho_G = Mat<D>::Zero();
+      Mat<D> G = Mat<D>::Zero();
       for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
         const std::uint32_t b = nl_.index[k];
         const Vec<D> r_ab = p_.x[a] - p_.x[b];
@@ -209,10 +209,11 @@ class Simulation {
         if (r <= 0.0) continue;
         if constexpr (grad_h)
           if (r >= Kernel::support * std::max(p_.h[a], p_.h[b])) continue;
-        rho_G += physics::velocity_gradient_term<D>(p_.m[b], p_.v[a] - p_.v[b], pair_grad_W(r_ab, r, p_.h[a], p_.h[b]));
+        G += physics::velocity_gradient_term<D>(p_.m[b], p_.rho[b], p_.v[a] - p_.v[b],
+                                                pair_grad_W(r_ab, r, p_.h[a], p_.h[b]));
       }
       const double rho = p_.rho[a];
-      S_over_rho2_[a] = term.stress(rho_G / rho, rho) / (rho * rho);
+      S_over_rho2_[a] = term.stress(G, rho) / (rho * rho);
     }
     // A mirror ghost sees the stress reflected: S' = M S M with M = diag(+-1).
     for (std::size_t g = n; g < p_.size(); ++g) {

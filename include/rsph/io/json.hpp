@@ -54,6 +54,12 @@ class Json {
     for (std::size_t i = 0; i < xs.size(); ++i) s += (i ? ", " : "") + number(xs[i]);
     return raw(key, s + "]");
   }
+  /// An array of objects, one per line.
+  Json& set(const std::string& key, const std::vector<Json>& items) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < items.size(); ++i) s += (i ? ",\n" : "\n") + items[i].dump();
+    return raw(key, s + (items.empty() ? "]" : "\n]"));
+  }
 
   /// Pretty-printed with two-space indentation; nested objects are shifted to their depth.
   std::string dump() const {

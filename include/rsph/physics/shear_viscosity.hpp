@@ -123,10 +123,12 @@ struct NavierStokesViscosity {
   double signal_speed(double h) const { return 4.0 * nu / h; }
 };
 
-/// Flebbe et al. (1994) eq. (13): b's share of rho_a G_a = sum_b m_b (v_b - v_a) (x) nabla_a W_ab.
+/// b's share of the velocity gradient G_a = sum_b (m_b / rho_b) (v_b - v_a) (x) nabla_a W_ab. Flebbe
+/// et al. (1994) eq. (13) divides by rho_a instead; with rho_b a light particle next to heavy ones (the
+/// tail of a ring) gets a bounded gradient rather than one scaled by m_b / m_a.
 template <int D>
-Mat<D> velocity_gradient_term(double m_b, const Vec<D>& v_ab, const Vec<D>& grad_W) {
-  return (-m_b) * v_ab * grad_W.transpose();
+Mat<D> velocity_gradient_term(double m_b, double rho_b, const Vec<D>& v_ab, const Vec<D>& grad_W) {
+  return (-m_b / rho_b) * v_ab * grad_W.transpose();
 }
 
 /// Flebbe et al. (1994) eq. (12): dv_a/dt += m_b (S_a / rho_a^2 + S_b / rho_b^2) nabla_a W_ab, the

@@ -23,11 +23,15 @@ struct RemapParams {
   double min_fill = 1e-9;
   /// Open edges: an old cell is closed by a disc of this radius in units of the particle's h.
   double closing_radius_in_h = 2.0;
+  /// A new cell whose mass is below this fraction of the largest new mass is handed on like a nearly
+  /// empty one: it keeps far tails of an open flow from spawning particles of negligible mass.
+  double min_mass_ratio = 0.0;
 
   void validate() const {
     require(h_over_dx > 0.0, "regularization: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
     require(min_fill >= 0.0 && min_fill < 1.0, "regularization: min_fill must lie in [0, 1)");
     require(closing_radius_in_h > 0.0, "regularization: the closing radius must be positive");
+    require(min_mass_ratio >= 0.0 && min_mass_ratio < 1.0, "regularization: min_mass_ratio must lie in [0, 1)");
   }
 };
 
@@ -296,7 +300,9 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   stats.max_volume_mismatch = S.max_mismatch;
   const double cell_volume = lattice.cell_volume();
   std::vector<std::uint8_t> keep(n_cells, 0);
-  for (std::size_t c = 0; c < n_cells; ++c) keep[c] = S.fill[c] > params.min_fill * cell_volume && S.m[c] > 0.0;
+  const double min_mass = params.min_mass_ratio * *std::max_element(S.m.begin(), S.m.end());
+  for (std::size_t c = 0; c < n_cells; ++c)
+    keep[c] = S.fill[c] > params.min_fill * cell_volume && S.m[c] > 0.0 && S.m[c] >= min_mass;
   auto unflat = [&](std::size_t f) {
     std::array<std::int64_t, D> idx;
     for (int k = 0; k < D; ++k) {

@@ -1,0 +1,272 @@
+#pragma once
+// §4 of the paper: a pressureless ring on Keplerian orbits around GM = 1 spreads under a kinematic
+// viscosity nu_s (Lynden-Bell & Pringle 1974). Particles start on the regularization lattice over
+// the annulus where Sigma(tau*_0 = 0.018) is above a floor, with masses from eq. (16) and velocities
+// from eqs. (17)-(18); snapshots at the paper's tau*, each fitted by eq. (16) for an effective
+// viscous time and so an effective viscosity nu_eff.
+#include "common/run_helpers.hpp"
+#include "rsph/rsph.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace rsph::scenes {
+
+struct ViscousRingParams {
+  double nu = 4.8e-5;      ///< nu_s, in units of R_0 sqrt(GM R_0)
+  double h = 0.02;         ///< smoothing length (R_0)
+  double h_over_dx = 1.6;  ///< h / Delta
+  int cycle = 4;           ///< c_r in units of `cycle_unit` steps; 0: never regularize (plain SPH)
+  int cycle_unit = 40;
+  double tau0 = 0.018;  ///< tau* of the initial state
+  std::vector<double> taus{0.054, 0.090, 0.126, 0.162, 0.198};
+  double sigma_floor = 1e-4;     ///< the initial annulus: Sigma(tau*_0) above this fraction of its peak
+  double inner_radius = 0.1;     ///< particles inside are accreted by the central mass (removed, counted)
+  std::string viscosity = "mg";  ///< mg: Monaghan-Gingold with Meglicki's alpha; ns: Navier-Stokes stress
+  double bin_width = 0.01;       ///< radial bins of the azimuthal average (R_0)
+  double force = 0.25;           ///< time-step force factor
+  double M = 1.0;                ///< ring mass
+
+  void validate() const {
+    require(nu > 0.0, "viscous ring: nu must be positive (got " + std::to_string(nu) + ")");
+    require(h > 0.0 && h < 0.2, "viscous ring: h must lie in (0, 0.2) R_0 (got " + std::to_string(h) + ")");
+    require(h_over_dx > 0.0, "viscous ring: h/dx must be positive (got " + std::to_string(h_over_dx) + ")");
+    require(cycle >= 0 && cycle_unit >= 1, "viscous ring: the regularization cycle must be >= 0 (0: off)");
+    require(!taus.empty() && std::is_sorted(taus.begin(), taus.end()) && taus.front() > tau0,
+            "viscous ring: snapshot times tau* must increase and follow tau*_0 = " + std::to_string(tau0));
+    require(sigma_floor > 0.0 && sigma_floor < 1.0, "viscous ring: the initial floor must lie in (0, 1)");
+    require(viscosity == "mg" || viscosity == "ns", "viscous ring: unknown viscosity '" + viscosity + "' (mg, ns)");
+    require(bin_width > 0.0 && inner_radius >= 0.0, "viscous ring: bin width must be positive");
+  }
+  double spacing() const { return h / h_over_dx; }
+  analysis::ViscousRing ring() const { return {M, 1.0, 1.0, nu}; }
+  double time_of(double tau) const { return ring().time_at(tau, tau0); }
+  /// Open in both axes; its corner fixes the lattice origin.
+  Box<2> box() const {
+    Box<2> b;
+    b.lo = Vec<2>(-4.0, -4.0);
+    b.hi = Vec<2>(4.0, 4.0);
+    b.edge = {Edge::open, Edge::open};
+    return b;
+  }
+  /// The annulus x_in < R < x_out where Sigma(tau*_0) exceeds the floor.
+  std::pair<double, double> annulus() const {
+    const auto r = ring();
+    double peak = 0.0;
+    for (double x = 0.5; x < 1.5; x += 1e-4) peak = std::max(peak, r.sigma(tau0, x));
+    double x_in = 1.0, x_out = 1.0;
+    while (x_in > 1e-3 && r.sigma(tau0, x_in) > sigma_floor * peak) x_in -= 1e-4;
+    while (r.sigma(tau0, x_out) > sigma_floor * peak) x_out += 1e-4;
+    return {x_in, x_out};
+  }
+};
+
+/// Lattice sites inside the annulus; masses from eq. (16) over the kernel's lattice sum, so rho = Sigma.
+inline ParticleSet<2, false> ring_particles(const ViscousRingParams& s) {
+  s.validate();
+  const auto ring = s.ring();
+  const auto [x_in, x_out] = s.annulus();
+  const double dx = s.spacing();
+  const double bias = kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
+  const Box<2> box = s.box();
+  const lattice::Square lat{dx};
+  const auto range = lat.cells_touching(box, Vec<2>(-x_out, -x_out), Vec<2>(x_out, x_out));
+  ParticleSet<2, false> p;
+  for (std::int64_t j = range.lo[1]; j <= range.hi[1]; ++j)
+    for (std::int64_t i = range.lo[0]; i <= range.hi[0]; ++i) {
+      const Vec<2> x = lat.site(box, {i, j});
+      const double R = x.norm();
+      if (R < x_in || R > x_out) continue;
+      const Vec<2> e_R = x / R, e_phi(-e_R[1], e_R[0]);
+      const Vec<2> v = ring.v_phi(R) * e_phi + ring.v_R(s.tau0, R) * e_R;
+      p.add(ring.sigma(s.tau0, R) * dx * dx / bias, x, v, s.h);
+    }
+  require(p.n_real > 0, "viscous ring: the annulus holds no lattice site (h too large?)");
+  return p;
+}
+
+/// Azimuthal statistics of Sigma (the particles' SPH density) in radial bins.
+struct RingProfile {
+  std::vector<double> x, mean, min, max;
+};
+
+template <class P>
+RingProfile ring_profile(const P& p, double bin_width) {
+  double R_max = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) R_max = std::max(R_max, p.x[a].norm());
+  const auto n_bins = static_cast<std::size_t>(R_max / bin_width) + 1;
+  std::vector<double> sum(n_bins, 0.0), lo(n_bins, std::numeric_limits<double>::infinity()), hi(n_bins, 0.0);
+  std::vector<std::size_t> count(n_bins, 0);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const auto b = static_cast<std::size_t>(p.x[a].norm() / bin_width);
+    sum[b] += p.rho[a];
+    lo[b] = std::min(lo[b], p.rho[a]);
+    hi[b] = std::max(hi[b], p.rho[a]);
+    ++count[b];
+  }
+  RingProfile out;
+  for (std::size_t b = 0; b < n_bins; ++b) {
+    if (count[b] == 0) continue;
+    out.x.push_back((static_cast<double>(b) + 0.5) * bin_width);
+    out.mean.push_back(sum[b] / static_cast<double>(count[b]));
+    out.min.push_back(lo[b]);
+    out.max.push_back(hi[b]);
+  }
+  return out;
+}
+
+/// One snapshot's measurements.
+struct RingSnapshot {
+  double tau = 0.0, time = 0.0, tau_fit = 0.0, nu_eff = 0.0, noise = 0.0, mass = 0.0;
+  std::size_t particles = 0;
+  RingProfile profile;
+};
+
+/// Fits the profile and measures the noise error: the bin's max - min, averaged over the bins where the
+/// analytic Sigma(tau*) exceeds 1 % of its peak, over that peak.
+inline RingSnapshot measure_ring(const ViscousRingParams& s, double tau, double time, RingProfile profile) {
+  RingSnapshot snap;
+  snap.tau = tau;
+  snap.time = time;
+  const auto ring = s.ring();
+  snap.tau_fit = analysis::fit_viscous_time(ring, profile.x, profile.mean, s.tau0 * 1.0001, 20.0 * tau);
+  snap.nu_eff = (snap.tau_fit - s.tau0) / (12.0 * time);
+  double peak = 0.0;
+  for (double x = 0.2; x < 2.0; x += 1e-3) peak = std::max(peak, ring.sigma(tau, x));
+  double noise = 0.0;
+  int bins = 0;
+  for (std::size_t i = 0; i < profile.x.size(); ++i)
+    if (ring.sigma(tau, profile.x[i]) >= 0.01 * peak) {
+      noise += profile.max[i] - profile.min[i];
+      ++bins;
+    }
+  snap.noise = bins > 0 ? noise / (bins * peak) : 0.0;
+  snap.profile = std::move(profile);
+  return snap;
+}
+
+struct RingRun {
+  std::vector<RingSnapshot> snapshots;
+  double nu_eff = 0.0, nu_eff_min = 0.0, nu_eff_max = 0.0, noise_error = 0.0;
+  double mass_initial = 0.0, mass_final = 0.0, mass_accreted = 0.0, max_mass_error = 0.0;
+  double wall_seconds = 0.0, regularization_seconds = 0.0, mean_particles = 0.0;
+  std::size_t particles_initial = 0, particles_final = 0, particles_accreted = 0;
+  std::uint64_t steps = 0, updates = 0, regularizations = 0;
+  PhaseTimes phases;
+};
+
+namespace detail {
+
+/// Removes particles inside the accretion radius; returns their mass.
+template <class Sim>
+double accrete(Sim& sim, double radius, std::size_t& removed) {
+  auto& p = sim.particles();
+  const double r2 = radius * radius;
+  bool any = false;
+  for (std::size_t a = 0; a < p.n_real && !any; ++a) any = p.x[a].squaredNorm() < r2;
+  if (!any) return 0.0;
+  typename Sim::Particles kept;
+  kept.reserve(p.n_real);
+  double mass = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    if (p.x[a].squaredNorm() < r2) {
+      mass += p.m[a];
+      ++removed;
+      continue;
+    }
+    kept.add(p.m[a], p.x[a], p.v[a], p.h[a]);
+  }
+  p = std::move(kept);
+  sim.compute_rates();
+  return mass;
+}
+
+template <class Sim, class OnStep, class OnSnapshot>
+RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
+  RingRun r;
+  const auto t0 = std::chrono::steady_clock::now();
+  r.mass_initial = sim.totals().mass;
+  r.particles_initial = sim.particles().n_real;
+  double particle_steps = 0.0;
+  on_snapshot(sim, -1);
+  for (std::size_t k = 0; k < s.taus.size(); ++k) {
+    const double t_snap = s.time_of(s.taus[k]);
+    while (sim.time() < t_snap * (1.0 - 1e-14)) {
+      sim.step(t_snap - sim.time());
+      r.mass_accreted += accrete(sim, s.inner_radius, r.particles_accreted);
+      particle_steps += static_cast<double>(sim.particles().n_real);
+      on_step(sim);
+    }
+    const double mass = sim.totals().mass;
+    r.max_mass_error = std::max(r.max_mass_error, std::abs(mass + r.mass_accreted - r.mass_initial) / r.mass_initial);
+    auto snap = measure_ring(s, s.taus[k], sim.time(), ring_profile(sim.particles(), s.bin_width));
+    snap.mass = mass;
+    snap.particles = sim.particles().n_real;
+    r.snapshots.push_back(std::move(snap));
+    on_snapshot(sim, static_cast<int>(k));
+  }
+  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.mass_final = sim.totals().mass;
+  r.particles_final = sim.particles().n_real;
+  r.steps = sim.steps();
+  r.updates = sim.particle_updates();
+  r.mean_particles = r.steps > 0 ? particle_steps / static_cast<double>(r.steps) : 0.0;
+  r.regularizations = sim.regularizations();
+  r.phases = sim.phase_times();
+  r.regularization_seconds = r.phases.regularization;
+  double sum = 0.0, noise = 0.0;
+  r.nu_eff_min = std::numeric_limits<double>::infinity();
+  r.nu_eff_max = -std::numeric_limits<double>::infinity();
+  for (const auto& snap : r.snapshots) {
+    sum += snap.nu_eff;
+    noise += snap.noise;
+    r.nu_eff_min = std::min(r.nu_eff_min, snap.nu_eff);
+    r.nu_eff_max = std::max(r.nu_eff_max, snap.nu_eff);
+  }
+  r.nu_eff = sum / static_cast<double>(r.snapshots.size());
+  r.noise_error = noise / static_cast<double>(r.snapshots.size());
+  return r;
+}
+
+}  // namespace detail
+
+/// Runs the ring with the scene's regularization cycle and viscosity. on_step(sim) after each step;
+/// on_snapshot(sim, k) at the start (k = -1) and at each snapshot k.
+template <class OnStep, class OnSnapshot>
+RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
+  using K = kernel::CubicSpline;
+  using MG = physics::ShearViscosityMG<K, 2>;
+  using NS = physics::NavierStokesViscosity<2>;
+  using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps>;
+  s.validate();
+  TimeStepParams ts;
+  ts.force = s.force;
+  const physics::PointMass<2> star{1.0, Vec<2>::Zero(), 0.0};
+  // Open edges: an edge cell closed at 0.75 Delta has about one lattice cell's area, and a new cell
+  // less than half covered hands its share to its neighbour, so the edge follows the gas rather
+  // than creeping outwards by a closing radius at every regularization; cells with less than 1e-6 of
+  // the largest mass join their neighbours, so the far tails (Sigma ~ 1e-6 of its peak) cost nothing.
+  const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
+  const auto reg =
+      Reg(lattice::Square{s.spacing()}, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit}, remap);
+  auto run = [&](auto&& sim) { return detail::run_ring(sim, s, on_step, on_snapshot); };
+  if (s.viscosity == "ns") {
+    if (s.cycle > 0)
+      return run(Simulation<2, K, eos::Pressureless, Reg, NS, physics::PointMass<2>>(ring_particles(s), s.box(), {},
+                                                                                     reg, ts, NS{s.nu}, star));
+    return run(Simulation<2, K, eos::Pressureless, regularize::None, NS, physics::PointMass<2>>(
+        ring_particles(s), s.box(), {}, {}, ts, NS{s.nu}, star));
+  }
+  const MG mg = MG::on_square_lattice(s.nu, s.h_over_dx);
+  if (s.cycle > 0)
+    return run(Simulation<2, K, eos::Pressureless, Reg, MG, physics::PointMass<2>>(ring_particles(s), s.box(), {}, reg,
+                                                                                   ts, mg, star));
+  return run(Simulation<2, K, eos::Pressureless, regularize::None, MG, physics::PointMass<2>>(
+      ring_particles(s), s.box(), {}, {}, ts, mg, star));
+}
+
+}  // namespace rsph::scenes
