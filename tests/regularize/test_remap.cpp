@@ -221,3 +221,35 @@ TEST_CASE("1D remap: a shift by one spacing keeps a profile, half a spacing diff
   CHECK(w025 > w01);
   CHECK(w05 > w025);
 }
+
+TEST_CASE("open edges: tails lighter than min_mass_ratio join their neighbours, conserving exactly", "[regularize]") {
+  // a Gaussian blob whose outer particles carry masses down to 1e-12 of the centre's
+  ParticleSet<2, false> p;
+  const double dx = 0.02;
+  for (int j = -30; j <= 30; ++j)
+    for (int i = -30; i <= 30; ++i) {
+      const Vec<2> x(i * dx + 0.003 * ((i * 7 + j * 3) % 5), j * dx + 0.002 * ((i * 5 + j) % 7));
+      p.add(std::exp(-x.squaredNorm() / 0.02) * dx * dx, x, Vec<2>(-x[1], x[0]), 1.6 * dx);
+    }
+  const auto open = box_with(Edge::open, Edge::open);
+  auto all = p;
+  const auto kept_all = check_conserving_remap(all, open, lattice::Square{dx}, RemapParams{1.6, 0.5, 0.75 / 1.6});
+  const auto stats = check_conserving_remap(p, open, lattice::Square{dx}, RemapParams{1.6, 0.5, 0.75 / 1.6, 1e-6});
+  CHECK(stats.n_after < kept_all.n_after);
+  auto light = [](const ParticleSet<2, false>& q) {
+    double m_max = 0.0;
+    for (std::size_t a = 0; a < q.n_real; ++a) m_max = std::max(m_max, q.m[a]);
+    std::size_t n = 0;
+    for (std::size_t a = 0; a < q.n_real; ++a) n += q.m[a] < 1e-6 * m_max;
+    return n;
+  };
+  INFO("light particles: " << light(all) << " of " << all.n_real << " without the ratio, " << light(p) << " of "
+                           << p.n_real << " with it");
+  CHECK(light(p) * 10 < light(all));  // only isolated local maxima of the far tail stay (104 of 1640)
+  CHECK(light(p) * 20 < p.n_real);
+  // a new cell less than half covered gets no particle: the edge does not creep outwards
+  double r_before = 0.0, r_after = 0.0;
+  for (std::size_t a = 0; a < all.n_real; ++a) r_after = std::max(r_after, all.x[a].norm());
+  for (int k : {-30, 30}) r_before = std::max(r_before, std::hypot(k * dx, k * dx));
+  CHECK(r_after < r_before + dx);
+}

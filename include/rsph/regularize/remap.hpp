@@ -312,11 +312,13 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
     }
     return idx;
   };
-  for (std::size_t c = 0; c < n_cells; ++c) {
-    if (keep[c] || S.m[c] == 0.0) continue;
+  // Each pass hands every cell that gets no particle to its fullest kept neighbour or, lacking one, to
+  // its heaviest neighbour that outweighs it; shares so flow towards kept cells along rising mass.
+  // Cells with no such neighbour at all keep their particle rather than lose their share.
+  auto best_neighbour = [&](std::size_t c) {
     const auto idx = unflat(c);
-    std::int64_t best = -1;
-    double best_fill = 0.0;
+    std::int64_t kept_best = -1, heavy_best = -1;
+    double best_fill = 0.0, best_mass = S.m[c];
     std::array<std::int64_t, D> off{};
     for (int k = 0; k < D; ++k) off[static_cast<std::size_t>(k)] = -1;
     for (;;) {
@@ -324,9 +326,16 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
       for (int k = 0; k < D; ++k)
         nb[static_cast<std::size_t>(k)] = idx[static_cast<std::size_t>(k)] + off[static_cast<std::size_t>(k)];
       const std::int64_t f = flat(nb);
-      if (f >= 0 && keep[static_cast<std::size_t>(f)] && S.fill[static_cast<std::size_t>(f)] > best_fill) {
-        best = f;
-        best_fill = S.fill[static_cast<std::size_t>(f)];
+      if (f >= 0 && static_cast<std::size_t>(f) != c) {
+        const auto g = static_cast<std::size_t>(f);
+        if (keep[g] && S.fill[g] > best_fill) {
+          kept_best = f;
+          best_fill = S.fill[g];
+        }
+        if (!keep[g] && S.m[g] > best_mass) {
+          heavy_best = f;
+          best_mass = S.m[g];
+        }
       }
       int k = 0;
       for (; k < D; ++k) {
@@ -335,17 +344,27 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
       }
       if (k == D) break;
     }
-    if (best < 0) {
-      keep[c] = 1;  // no kept neighbour: keep the particle rather than lose its share
-      continue;
+    return kept_best >= 0 ? kept_best : heavy_best;
+  };
+  for (bool moved = true; moved;) {
+    moved = false;
+    for (std::size_t c = 0; c < n_cells; ++c) {
+      if (keep[c] || S.m[c] == 0.0) continue;
+      const std::int64_t best = best_neighbour(c);
+      if (best < 0) continue;
+      const auto b = static_cast<std::size_t>(best);
+      S.m[b] += S.m[c];
+      S.mv[b] += S.mv[c];
+      S.E[b] += S.E[c];
+      S.m[c] = 0.0;
+      S.mv[c] = Vec<D>::Zero();
+      S.E[c] = 0.0;
+      ++stats.dropped_cells;
+      moved = true;
     }
-    const auto b = static_cast<std::size_t>(best);
-    S.m[b] += S.m[c];
-    S.mv[b] += S.mv[c];
-    S.E[b] += S.E[c];
-    S.m[c] = 0.0;
-    ++stats.dropped_cells;
   }
+  for (std::size_t c = 0; c < n_cells; ++c)
+    if (!keep[c] && S.m[c] > 0.0) keep[c] = 1;  // no neighbour to take its share
 
   // New particles in lattice order; u takes up the kinetic energy the averaging removed.
   double ke_before = 0.0, ke_after = 0.0;
