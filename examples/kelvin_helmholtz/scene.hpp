@@ -109,17 +109,13 @@ struct KhRun {
 
 /// Least-squares slope of ln M over [t0, t1]: the growth rate of the linear phase.
 inline double fitted_growth_rate(const std::vector<double>& t, const std::vector<double>& M, double t0, double t1) {
-  double n = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
+  std::vector<double> x, y;
   for (std::size_t i = 0; i < t.size(); ++i) {
     if (t[i] < t0 || t[i] > t1 || !(M[i] > 0.0)) continue;
-    const double y = std::log(M[i]);
-    n += 1;
-    sx += t[i];
-    sy += y;
-    sxx += t[i] * t[i];
-    sxy += t[i] * y;
+    x.push_back(t[i]);
+    y.push_back(std::log(M[i]));
   }
-  return n >= 2 ? (n * sxy - sx * sy) / (n * sxx - sx * sx) : 0.0;
+  return x.size() >= 2 ? analysis::least_squares_slope(x, y) : 0.0;
 }
 
 template <class Sim, class OnStep, class OnEnd>

@@ -1,5 +1,6 @@
 #pragma once
 // The damping rate gamma of eq. (11) and the phase error of a sensor signal delta_rho(t).
+#include "rsph/analysis/fit.hpp"
 #include "rsph/core/errors.hpp"
 
 #include <algorithm>
@@ -38,17 +39,9 @@ inline double phase_error(const std::vector<double>& t, const std::vector<double
     if (signal[i - 1] < 0.0 && signal[i] >= 0.0)
       crossings.push_back(t[i - 1] + (t[i] - t[i - 1]) * (-signal[i - 1]) / (signal[i] - signal[i - 1]));
   require(crossings.size() >= 3, "phase error: fewer than three zero crossings");
-  const double n = static_cast<double>(crossings.size());
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (std::size_t j = 0; j < crossings.size(); ++j) {
-    const double x = static_cast<double>(j);
-    sx += x;
-    sy += crossings[j];
-    sxx += x * x;
-    sxy += x * crossings[j];
-  }
-  const double measured = (n * sxy - sx * sy) / (n * sxx - sx * sx);
-  return measured / period - 1.0;
+  std::vector<double> index(crossings.size());
+  for (std::size_t j = 0; j < index.size(); ++j) index[j] = static_cast<double>(j);
+  return least_squares_slope(index, crossings) / period - 1.0;
 }
 
 }  // namespace rsph::analysis

@@ -1,6 +1,7 @@
 #pragma once
 // Umbrella header of the rsph engine (Eigen and Boost headers only). I/O lives in rsph/io/ and needs
 // the rsph::io target (HDF5, fmt).
+#include "rsph/analysis/fit.hpp"
 #include "rsph/analysis/riemann.hpp"
 #include "rsph/analysis/shock_tube.hpp"
 #include "rsph/analysis/viscous_ring.hpp"

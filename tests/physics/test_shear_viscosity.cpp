@@ -46,16 +46,7 @@ double measured_nu(const Term& term, int cells, double h_over_dx, double t_end) 
     t.push_back(sim.time());
     lnA.push_back(std::log(amplitude()));
   }
-  double st = 0, sa = 0, stt = 0, sta = 0;
-  const double n = static_cast<double>(t.size());
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    st += t[i];
-    sa += lnA[i];
-    stt += t[i] * t[i];
-    sta += t[i] * lnA[i];
-  }
-  const double slope = (n * sta - st * sa) / (n * stt - st * st);
-  return -slope / (kTwoPi * kTwoPi);
+  return -analysis::least_squares_slope(t, lnA) / (kTwoPi * kTwoPi);
 }
 
 }  // namespace
