@@ -113,7 +113,7 @@ int main(int argc, char** argv) {
     summary.set("particles_mean", r.mean_particles);
     summary.set("wall_seconds", r.wall_seconds).set("cpu_seconds", ex::cpu_seconds()).set("steps", r.steps);
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
-    summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
+    summary.set("regularizations", r.regularizations).set("regularization_seconds", r.phases.regularization);
     summary.set("phase_seconds", ex::phase_json(r.phases)).set("snapshots", snaps);
     summary.write(dir / "summary.json");
     fmt::print(

@@ -56,8 +56,7 @@ struct ViscousRingParams {
   /// The annulus x_in < R < x_out where Sigma(tau*_0) exceeds the floor.
   std::pair<double, double> annulus() const {
     const auto r = ring();
-    double peak = 0.0;
-    for (double x = 0.5; x < 1.5; x += 1e-4) peak = std::max(peak, r.sigma(tau0, x));
+    const double peak = r.peak_sigma(tau0);
     double x_in = 1.0, x_out = 1.0;
     while (x_in > 1e-3 && r.sigma(tau0, x_in) > sigma_floor * peak) x_in -= 1e-4;
     while (r.sigma(tau0, x_out) > sigma_floor * peak) x_out += 1e-4;
@@ -135,8 +134,7 @@ inline RingSnapshot measure_ring(const ViscousRingParams& s, double tau, double 
   const auto ring = s.ring();
   snap.tau_fit = analysis::fit_viscous_time(ring, profile.x, profile.mean, s.tau0 * 1.0001, 20.0 * tau);
   snap.nu_eff = (snap.tau_fit - s.tau0) / (12.0 * time);
-  double peak = 0.0;
-  for (double x = 0.2; x < 2.0; x += 1e-3) peak = std::max(peak, ring.sigma(tau, x));
+  const double peak = ring.peak_sigma(tau);
   double noise = 0.0;
   int bins = 0;
   for (std::size_t i = 0; i < profile.x.size(); ++i)
@@ -153,7 +151,7 @@ struct RingRun {
   std::vector<RingSnapshot> snapshots;
   double nu_eff = 0.0, nu_eff_min = 0.0, nu_eff_max = 0.0, noise_error = 0.0;
   double mass_initial = 0.0, mass_final = 0.0, mass_accreted = 0.0, max_mass_error = 0.0;
-  double wall_seconds = 0.0, regularization_seconds = 0.0, mean_particles = 0.0;
+  double wall_seconds = 0.0, mean_particles = 0.0;
   std::size_t particles_initial = 0, particles_final = 0, particles_accreted = 0;
   std::uint64_t steps = 0, updates = 0, regularizations = 0;
   PhaseTimes phases;
@@ -217,7 +215,6 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
   r.mean_particles = r.steps > 0 ? particle_steps / static_cast<double>(r.steps) : 0.0;
   r.regularizations = sim.regularizations();
   r.phases = sim.phase_times();
-  r.regularization_seconds = r.phases.regularization;
   double sum = 0.0, noise = 0.0;
   r.nu_eff_min = std::numeric_limits<double>::infinity();
   r.nu_eff_max = -std::numeric_limits<double>::infinity();

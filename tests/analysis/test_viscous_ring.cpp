@@ -49,6 +49,8 @@ TEST_CASE("eq. (16) holds the ring's mass and solves the viscous diffusion equat
           Approx(-3.0 / (ring.sigma(tau, R) * std::sqrt(R)) * (f(R + e) - f(R - e)) / (2 * e)).epsilon(1e-6));
   }
   CHECK(ring.v_phi(4.0) == Approx(0.5));
+  // the peak the noise error is normalised by (0.305 M / (pi R_0^2) at tau* = 0.09 for M = 1)
+  CHECK(ring.peak_sigma(0.09) == Approx(2.5 * 0.305).epsilon(2e-3));
   CHECK(ring.tau_at(ring.time_at(0.09, 0.018), 0.018) == Approx(0.09));
 }
 

@@ -3,6 +3,7 @@
 // density (eq. 16), the velocities (eqs. 17-18), and the chi^2 fit of an effective viscous time.
 #include "rsph/core/errors.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -53,6 +54,13 @@ struct ViscousRing {
   }
   /// eq. (16)
   double sigma(double tau, double x) const { return std::exp(log_sigma(tau, x)); }
+
+  /// The largest Sigma(tau*, x), by a scan at 1e-4 R_0 over 0 < x < 3 (the ring never peaks beyond).
+  double peak_sigma(double tau) const {
+    double peak = 0.0;
+    for (double x = 1e-4; x < 3.0; x += 1e-4) peak = std::max(peak, sigma(tau, x));
+    return peak;
+  }
 
   /// eq. (17): Keplerian azimuthal velocity at radius R.
   double v_phi(double R) const { return std::sqrt(GM / R); }
