@@ -19,6 +19,7 @@
 #include "rsph/regularize/concept.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -330,18 +331,15 @@ class Simulation {
 
   static constexpr double kHMargin = 1.25;  // search radius over h while h is solved
 
-  static constexpr std::size_t solver_index() {
-    std::size_t i = 0, found = 0;
-    ((SmoothingLengthSolver<Terms> ? (found = i, ++i) : ++i), ...);
-    return found;
+  /// Position in Terms of the first term of a kind (the kinds that allow at most one).
+  static constexpr std::size_t first_of(std::array<bool, sizeof...(Terms)> is_kind) {
+    for (std::size_t i = 0; i < is_kind.size(); ++i)
+      if (is_kind[i]) return i;
+    return 0;
   }
+  static constexpr std::size_t solver_index() { return first_of({SmoothingLengthSolver<Terms>...}); }
+  static constexpr std::size_t stress_index() { return first_of({StressTerm<Terms, D>...}); }
   const auto& h_solver() const { return std::get<solver_index()>(terms_); }
-
-  static constexpr std::size_t stress_index() {
-    std::size_t i = 0, found = 0;
-    ((StressTerm<Terms, D> ? (found = i, ++i) : ++i), ...);
-    return found;
-  }
 
   /// nabla_a W of a pair as the force sum uses it: at h_ab, or the mean of both h in grad-h SPH.
   static Vec<D> pair_grad_W(const Vec<D>& r_ab, double r, double h_a, double h_b) {
