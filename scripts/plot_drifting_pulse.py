@@ -4,9 +4,7 @@
 Usage: plot_drifting_pulse.py OUT_DIR [--png FILE]
 """
 import argparse
-import csv
 import glob
-import json
 import os
 import re
 
@@ -14,6 +12,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from rsph_plot import read_csv, read_summary, save_figure  # noqa: E402
 
 
 def main():
@@ -21,8 +20,7 @@ def main():
     ap.add_argument("out")
     ap.add_argument("--png")
     args = ap.parse_args()
-    with open(os.path.join(args.out, "summary.json")) as f:
-        summary = json.load(f)
+    summary = read_summary(args.out)
     shifts = sorted(summary["cases"], key=float)
     fig, axes = plt.subplots(1, len(shifts), figsize=(3.6 * len(shifts), 3.4), sharey=True, squeeze=False)
     styles = ["-", ":", "--", "-.", (0, (3, 1, 1, 1, 1, 1))]
@@ -31,8 +29,8 @@ def main():
         files.sort(key=lambda p: int(re.search(r"profile_(\d+)", p).group(1)))
         for style, path in zip(styles * 3, files):
             n = int(re.search(r"profile_(\d+)", path).group(1))
-            with open(path) as f:
-                rows = sorted((float(r["x"]), float(r["rho"])) for r in csv.DictReader(f))
+            p = read_csv(path)
+            rows = sorted(zip(p["x"], p["rho"]))
             ax.plot([r[0] for r in rows], [r[1] for r in rows], linestyle=style, color="k", lw=1, label=f"{n}")
         widths = summary["cases"][shift]["width_mass"]
         last = max(widths, key=int)
@@ -43,10 +41,8 @@ def main():
         ax.set_xlim(c - 12, c + 12)
     axes[0][0].set_ylabel(r"$\rho$")
     axes[0][0].legend(title="regularizations", fontsize=7)
-    fig.tight_layout()
     png = args.png or os.path.join(args.out, "drifting_pulse.png")
-    fig.savefig(png, dpi=110)
-    print(f"wrote {png}")
+    save_figure(fig, png)
 
 
 if __name__ == "__main__":

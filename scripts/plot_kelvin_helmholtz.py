@@ -4,7 +4,6 @@ rsph-kelvin-helmholtz output folders.
 
 Usage: plot_kelvin_helmholtz.py DIR [DIR ...] --png FILE
 """
-import argparse
 import math
 import os
 
@@ -13,14 +12,11 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from rsph_plot import read_csv, read_summary  # noqa: E402
+from rsph_plot import folders_and_png, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("dirs", nargs="+")
-    ap.add_argument("--png", required=True)
-    args = ap.parse_args()
+    args = folders_and_png(__doc__.splitlines()[0])
     n = len(args.dirs)
     fig = plt.figure(figsize=(6.5 * min(n, 2), 3.4 * ((n + 1) // 2) + 3.6))
     grid = fig.add_gridspec((n + 1) // 2 + 1, 2)
@@ -51,9 +47,7 @@ def main():
     amp_ax.set_xlabel("t")
     amp_ax.set_ylabel("mode amplitude (McNally et al. 2012)")
     amp_ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(args.png, dpi=100)
-    print(f"wrote {args.png}")
+    save_figure(fig, args.png, dpi=100)
 
 
 if __name__ == "__main__":

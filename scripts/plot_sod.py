@@ -3,21 +3,17 @@
 
 Usage: plot_sod.py OUT_DIR [OUT_DIR ...] --png FILE
 """
-import argparse
 import os
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from rsph_plot import read_csv, read_summary  # noqa: E402
+from rsph_plot import folders_and_png, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def main():
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("dirs", nargs="+")
-    ap.add_argument("--png", required=True)
-    args = ap.parse_args()
+    args = folders_and_png(__doc__.splitlines()[0])
     fig, axes = plt.subplots(len(args.dirs), 3, figsize=(13, 3.6 * len(args.dirs)), squeeze=False)
     for row, d in zip(axes, args.dirs):
         parts = read_csv(os.path.join(d, "particles.csv"))
@@ -34,9 +30,7 @@ def main():
                     f"{s['particle_updates_per_second']:.3g} particle updates/s", transform=row[2].transAxes,
                     fontsize=8)
     fig.suptitle("Sod shock tube at t = 0.2: grad-h SPH (cubic spline, alpha = 1, beta = 2) vs exact solution")
-    fig.tight_layout()
-    fig.savefig(args.png, dpi=110)
-    print(f"wrote {args.png}")
+    save_figure(fig, args.png)
 
 
 if __name__ == "__main__":

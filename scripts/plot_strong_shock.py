@@ -4,21 +4,17 @@ rsph-strong-shock output folders, and accuracy against cost.
 
 Usage: plot_strong_shock.py DIR [DIR ...] --png FILE
 """
-import argparse
 import os
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from rsph_plot import read_csv, read_summary  # noqa: E402
+from rsph_plot import folders_and_png, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def main():
-    ap = argparse.ArgumentParser()
-    ap.add_argument("dirs", nargs="+")
-    ap.add_argument("--png", required=True)
-    args = ap.parse_args()
+    args = folders_and_png(__doc__.splitlines()[0])
     fig, (a_rho, a_v, a_cost) = plt.subplots(1, 3, figsize=(16, 4.5))
     exact = read_csv(os.path.join(args.dirs[0], "exact.csv"))
     a_rho.plot(exact["x"], exact["rho"], "k-", lw=1, label="exact")
@@ -44,9 +40,7 @@ def main():
     a_cost.set_ylabel(r"L1($\rho$)")
     a_cost.set_title("accuracy against cost")
     fig.suptitle("Strong shock (pressure ratio 1e10), t = 2.5e-6")
-    fig.tight_layout()
-    fig.savefig(args.png, dpi=110)
-    print(f"wrote {args.png}")
+    save_figure(fig, args.png)
 
 
 if __name__ == "__main__":

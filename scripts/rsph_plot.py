@@ -1,4 +1,5 @@
 """Helpers shared by the plot scripts (run with Debian's /usr/bin/python3)."""
+import argparse
 import csv
 import json
 import os
@@ -34,3 +35,18 @@ def run_example(binary, out, args, rerun=True):
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr}")
     return read_summary(out)
+
+
+def folders_and_png(description):
+    """Command line of the plot scripts: output folders of an example, and the PNG to write."""
+    ap = argparse.ArgumentParser(description=description)
+    ap.add_argument("dirs", nargs="+")
+    ap.add_argument("--png", required=True)
+    return ap.parse_args()
+
+
+def save_figure(fig, path, dpi=110):
+    """Lays out, writes and announces one figure."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=dpi)
+    print(f"wrote {path}")

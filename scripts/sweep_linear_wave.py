@@ -20,7 +20,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rsph_plot import floats, run_example  # noqa: E402
+from rsph_plot import floats, run_example, save_figure  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BIN = os.path.join(HERE, "..", "build", "bin", "rsph-linear-wave")
@@ -105,8 +105,7 @@ def main():
         ax2.set_ylabel(r"$|\gamma|$ (error: any damping or growth)")
         ax2.set_title("accuracy against cost")
         ax2.legend()
-        fig.tight_layout()
-        fig.savefig(os.path.join(args.out, "fig3_damping.png"), dpi=110)
+        save_figure(fig, os.path.join(args.out, "fig3_damping.png"))
     stab = [r for r in results if r[0] == "stability"]
     if stab:
         kernels = ["cubic", "quintic"]
@@ -128,9 +127,8 @@ def main():
         ax.set_title("plain SPH, no viscosity: growth of noise or amplitude\n(log10 colour; > 2 = unstable)",
                      fontsize=9)
         fig.colorbar(im, ax=ax)
-        fig.tight_layout()
-        fig.savefig(os.path.join(args.out, "stability_map.png"), dpi=110)
-    print(f"wrote {args.out}/sweep.csv and plots")
+        save_figure(fig, os.path.join(args.out, "stability_map.png"))
+    print(f"wrote {args.out}/sweep.csv")
 
 
 if __name__ == "__main__":

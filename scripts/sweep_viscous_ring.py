@@ -23,7 +23,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rsph_plot import floats, read_csv, run_example  # noqa: E402
+from rsph_plot import floats, read_csv, run_example, save_figure  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BIN = os.path.join(HERE, "..", "build", "bin", "rsph-viscous-ring")
@@ -131,8 +131,7 @@ def main():
                 a.set_yscale("log")
             a.legend(fontsize=7)
     fig.suptitle(f"Viscous ring: effective viscosity (Fig. 10) and noise (Fig. 11), h = {h0:g} in the top rows")
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "fig10_fig11_nu_eff_noise.png"), dpi=120)
+    save_figure(fig, os.path.join(args.out, "fig10_fig11_nu_eff_noise.png"), dpi=120)
 
     # Figs. 7-9: profiles at the second snapshot (tau* = 0.090 by default)
     panels = [("c_r", [(c, 1.6, h0) for c in cycles]), ("h/Δ", [(4, r, h0) for r in hdxs]),
@@ -153,8 +152,7 @@ def main():
         ax.set_ylabel(r"$\Sigma$")
         ax.legend(fontsize=7)
     fig.suptitle(r"Profiles at the second snapshot: mean, min-max band, fit (dash-dot), analytic (dashed)")
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "fig7_9_profiles.png"), dpi=120)
+    save_figure(fig, os.path.join(args.out, "fig7_9_profiles.png"), dpi=120)
 
     # accuracy against cost
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
@@ -171,9 +169,8 @@ def main():
         a.set_xscale("log")
         a.set_yscale("log")
     fig.suptitle("Viscous ring: accuracy against cost (labels: c_r, h/Δ, h)")
-    fig.tight_layout()
-    fig.savefig(os.path.join(args.out, "accuracy_vs_cost.png"), dpi=120)
-    print(f"wrote {table} and the figures in {args.out}")
+    save_figure(fig, os.path.join(args.out, "accuracy_vs_cost.png"), dpi=120)
+    print(f"wrote {table}")
 
 
 if __name__ == "__main__":
