@@ -40,7 +40,8 @@ struct ViscousRingParams {
             "viscous ring: snapshot times tau* must increase and follow tau*_0 = " + std::to_string(tau0));
     require(sigma_floor > 0.0 && sigma_floor < 1.0, "viscous ring: the initial floor must lie in (0, 1)");
     require(viscosity == "mg" || viscosity == "ns", "viscous ring: unknown viscosity '" + viscosity + "' (mg, ns)");
-    require(bin_width > 0.0 && inner_radius >= 0.0, "viscous ring: bin width must be positive");
+    require(bin_width > 0.0, "viscous ring: the radial bin width must be positive");
+    require(inner_radius >= 0.0, "viscous ring: the accretion radius must be non-negative");
   }
   double spacing() const { return h / h_over_dx; }
   analysis::ViscousRing ring() const { return {M, 1.0, 1.0, nu}; }

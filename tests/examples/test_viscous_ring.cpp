@@ -54,7 +54,6 @@ TEST_CASE("viscous ring: regularization adds viscosity and removes noise, conser
     CHECK(r->mass_accreted < 5e-3 * r->mass_initial);  // inside R = 0.3, where Sigma < 1 % of its peak
   }
   CHECK(often.regularizations > 5 * rarely.regularizations);
-  CHECK(never.regularizations == 0);
   // nu_eff falls as c_r grows; without regularization the fit recovers nu_s within 20 %
   CHECK(often.nu_eff > 1.15 * rarely.nu_eff);
   CHECK(rarely.nu_eff > never.nu_eff);
