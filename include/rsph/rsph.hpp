@@ -36,6 +36,8 @@
 #include "rsph/regularize/concept.hpp"
 #include "rsph/regularize/lattice.hpp"
 #include "rsph/regularize/lattice_regularizer.hpp"
+#include "rsph/regularize/multilevel.hpp"
+#include "rsph/regularize/refinement.hpp"
 #include "rsph/regularize/remap.hpp"
 #include "rsph/regularize/schedule.hpp"
 #include "rsph/simulation.hpp"

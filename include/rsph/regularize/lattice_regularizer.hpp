@@ -4,6 +4,7 @@
 #include "rsph/geometry/voronoi.hpp"
 #include "rsph/regularize/concept.hpp"
 #include "rsph/regularize/lattice.hpp"
+#include "rsph/regularize/multilevel.hpp"
 #include "rsph/regularize/remap.hpp"
 #include "rsph/regularize/schedule.hpp"
 

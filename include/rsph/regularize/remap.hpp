@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -41,6 +42,11 @@ struct RemapStats {
   double kinetic_converted = 0.0;    ///< kinetic energy turned into heat (or dissipated, without u)
   double max_volume_mismatch = 0.0;  ///< max over old cells of |sum_n Omega_n^o - V_o| / V_o
   std::size_t dropped_cells = 0;     ///< nearly empty new cells whose share was handed on
+  /// New particles per resolution level (one entry on a uniform lattice).
+  std::vector<std::size_t> per_level;
+  /// Multi-level lattices: blocks whose criterion asked for more than the finest level, and the level asked.
+  std::size_t capped_blocks = 0;
+  int requested_level = 0;
 };
 
 namespace detail {
@@ -93,23 +99,46 @@ inline std::int64_t wrap_index(std::int64_t i, std::int64_t period) {
   return i < 0 ? i + period : i;
 }
 
-}  // namespace detail
+/// The dense block of candidate new cells a remap accumulates into: an index range per axis, wrapped
+/// on periodic axes.
+template <int D>
+struct CellGrid {
+  IndexRange<D> range;
+  std::array<std::int64_t, D> count{}, periods{};
+  std::size_t n_cells = 0;
 
-/// Remaps `p` (real particles only, no ghosts) onto `lattice`; returns the statistics. New particles
-/// are stored in lattice order with h = h_over_dx * Delta; u absorbs the kinetic energy lost when the
-/// gas carries it.
-template <class Lattice, class Builder, int D, bool E>
-RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
-                              const RemapParams& params) {
-  static_assert(Lattice::dim == D, "the lattice's dimension differs from the particles'");
-  params.validate();
-  require(lattice.spacing > 0.0, "regularization: the lattice spacing must be positive");
-  require(p.n_ghost() == 0, "regularization: remove ghosts before remapping");
-  require(p.n_real > 0, "regularization: no particles to remap");
+  /// Flat index of a cell, wrapping periodic axes; -1 outside the grid.
+  std::int64_t flat(std::array<std::int64_t, D> idx) const {
+    std::int64_t f = 0;
+    for (int k = D - 1; k >= 0; --k) {
+      const auto kk = static_cast<std::size_t>(k);
+      std::int64_t i = idx[kk];
+      if (periods[kk] > 0) i = wrap_index(i, periods[kk]);
+      i -= range.lo[kk];
+      if (i < 0 || i >= count[kk]) return -1;
+      f = f * count[kk] + i;
+    }
+    return f;
+  }
+  std::array<std::int64_t, D> unflat(std::size_t f) const {
+    std::array<std::int64_t, D> idx;
+    for (int k = 0; k < D; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      idx[kk] = range.lo[kk] + static_cast<std::int64_t>(f % static_cast<std::size_t>(count[kk]));
+      f /= static_cast<std::size_t>(count[kk]);
+    }
+    return idx;
+  }
+};
+
+/// The candidate cells: the whole box on closed axes, the particles' extent plus the closing radius on
+/// open ones, there rounded out to whole multiples of `align` cells (counted from box.lo).
+template <class Lattice, int D, bool E>
+CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
+                           const RemapParams& params, std::int64_t align = 1) {
+  CellGrid<D> g;
+  g.periods = lattice.periods(box);
   const std::size_t n_old = p.n_real;
-  const auto periods = lattice.periods(box);
-
-  // Dense grid of candidate new cells.
   Vec<D> lo, hi;
   double max_h = 0.0;
   for (std::size_t a = 0; a < n_old; ++a) max_h = std::max(max_h, p.h[a]);
@@ -128,42 +157,42 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
       hi[k] = box.hi[k];
     }
   }
-  IndexRange<D> range = lattice.cells_touching(box, lo, hi);
-  std::array<std::int64_t, D> count;
-  std::size_t n_cells = 1;
+  g.range = lattice.cells_touching(box, lo, hi);
+  g.n_cells = 1;
   for (int k = 0; k < D; ++k) {
     const auto kk = static_cast<std::size_t>(k);
-    if (periods[kk] > 0) {
-      range.lo[kk] = 0;
-      range.hi[kk] = periods[kk] - 1;
+    if (g.periods[kk] > 0) {
+      g.range.lo[kk] = 0;
+      g.range.hi[kk] = g.periods[kk] - 1;
     } else if (box.edge[k] == Edge::reflecting) {
       // rows whose sites lie inside the walls
-      while (lattice.site(box, range.lo)[k] < box.lo[k]) ++range.lo[kk];
-      auto top = range.lo;
-      top[kk] = range.hi[kk];
-      while (lattice.site(box, top)[k] > box.hi[k]) top[kk] = --range.hi[kk];
+      while (lattice.site(box, g.range.lo)[k] < box.lo[k]) ++g.range.lo[kk];
+      auto top = g.range.lo;
+      top[kk] = g.range.hi[kk];
+      while (lattice.site(box, top)[k] > box.hi[k]) top[kk] = --g.range.hi[kk];
+    } else if (align > 1) {
+      auto floor_div = [](std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
+      g.range.lo[kk] = floor_div(g.range.lo[kk], align) * align;
+      g.range.hi[kk] = (floor_div(g.range.hi[kk], align) + 1) * align - 1;
     }
-    count[kk] = range.hi[kk] - range.lo[kk] + 1;
-    n_cells *= static_cast<std::size_t>(count[kk]);
+    g.count[kk] = g.range.hi[kk] - g.range.lo[kk] + 1;
+    g.n_cells *= static_cast<std::size_t>(g.count[kk]);
   }
-  require(n_cells < (std::size_t{1} << 31), "regularization: the lattice would have more than 2^31 cells");
-  // Flat index of a cell, wrapping periodic axes; -1 outside the grid.
-  auto flat = [&](std::array<std::int64_t, D> idx) -> std::int64_t {
-    std::int64_t f = 0;
-    for (int k = D - 1; k >= 0; --k) {
-      const auto kk = static_cast<std::size_t>(k);
-      std::int64_t i = idx[kk];
-      if (periods[kk] > 0) i = detail::wrap_index(i, periods[kk]);
-      i -= range.lo[kk];
-      if (i < 0 || i >= count[kk]) return -1;
-      f = f * count[kk] + i;
-    }
-    return f;
-  };
+  require(g.n_cells < (std::size_t{1} << 31), "regularization: the lattice would have more than 2^31 cells");
+  return g;
+}
 
+/// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
+/// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
+template <class Lattice, class Builder, int D, bool E>
+Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
+                            const RemapParams& params, const CellGrid<D>& grid) {
+  const std::size_t n_old = p.n_real;
+  const auto& range = grid.range;
+  auto flat = [&](std::array<std::int64_t, D> idx) { return grid.flat(idx); };
   const int n_threads = geometry::builder_threads();
-  std::vector<detail::Sums<D>> sums(static_cast<std::size_t>(n_threads));
-  for (auto& s : sums) s.resize(n_cells);
+  std::vector<Sums<D>> sums(static_cast<std::size_t>(n_threads));
+  for (auto& s : sums) s.resize(grid.n_cells);
   auto specific_energy = [&](std::size_t a) {
     if constexpr (E)
       return p.u[a];
@@ -231,16 +260,13 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
       const ParticleSet<D, E>* p;
       const Lattice* lattice;
       const Box<2>* box;
-      decltype(flat)* flat_index;
-      const std::array<std::array<std::int64_t, 2>, 2>* range;
+      const CellGrid<2>* grid;
       std::vector<std::vector<std::pair<std::size_t, double>>> overlaps;
 
       std::array<std::int64_t, 2> clamp_to_walls(std::array<std::int64_t, 2> idx) const {
-        for (int k = 0; k < 2; ++k)
-          if (box->edge[k] == Edge::reflecting)
-            idx[static_cast<std::size_t>(k)] =
-                std::clamp(idx[static_cast<std::size_t>(k)], (*range)[0][static_cast<std::size_t>(k)],
-                           (*range)[1][static_cast<std::size_t>(k)]);
+        for (std::size_t k = 0; k < 2; ++k)
+          if (box->edge[static_cast<int>(k)] == Edge::reflecting)
+            idx[k] = std::clamp(idx[k], grid->range.lo[k], grid->range.hi[k]);
         return idx;
       }
       void restart() {
@@ -263,8 +289,8 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
             else
               omega = geometry::area(geometry::clip_convex(cell, nc));
             if (omega <= 0.0) continue;
-            std::int64_t f = (*flat_index)(idx);
-            if (f < 0) f = (*flat_index)(clamp_to_walls(idx));  // round-off sliver beyond a wall
+            std::int64_t f = grid->flat(idx);
+            if (f < 0) f = grid->flat(clamp_to_walls(idx));  // round-off sliver beyond a wall
             if (f < 0)
               throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
                                    std::to_string(a) + ")");
@@ -279,73 +305,47 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
         (*sums)[static_cast<std::size_t>(thread)].add(ov, p->m[a], p->v[a], e_o, cell_area);
       }
     };
-    const std::array<std::array<std::int64_t, 2>, 2> grid{{{range.lo[0], range.lo[1]}, {range.hi[0], range.hi[1]}}};
-    Visitor visitor{&sums,
-                    &p,
-                    &lattice,
-                    &box,
-                    &flat,
-                    &grid,
-                    std::vector<std::vector<std::pair<std::size_t, double>>>(static_cast<std::size_t>(n_threads))};
+    Visitor visitor{
+        &sums, &p,    &lattice,
+        &box,  &grid, std::vector<std::vector<std::pair<std::size_t, double>>>(static_cast<std::size_t>(n_threads))};
     builder.build(p.x, box, closing, visitor);
   }
 
   // Reduce the per-thread sums (fixed order: the result does not depend on scheduling).
   for (std::size_t t = 1; t < sums.size(); ++t) sums[0].merge(sums[t]);
-  auto& S = sums[0];
+  return std::move(sums[0]);
+}
 
-  // Hand the share of nearly empty cells to their fullest neighbour.
-  RemapStats stats;
-  stats.n_before = n_old;
-  stats.max_volume_mismatch = S.max_mismatch;
-  const double cell_volume = lattice.cell_volume();
+/// Hands the share of every new cell that gets no particle on, so mass stays exactly conserved: a cell
+/// covered over less than min_fill of its volume, or lighter than min_mass_ratio of the heaviest, goes to
+/// its fullest kept neighbour or, lacking one, to its heaviest neighbour that outweighs it (passes repeat,
+/// so shares flow towards kept cells along rising mass); a cell with no such neighbour keeps its particle.
+/// `volume(c)` is the volume of cell c; `for_each_neighbour(c, f)` calls f(g) for the cells g next to c.
+/// Returns the keep flags; `handed_on` counts the cells whose share moved.
+template <int D, class Volume, class ForEachNeighbour>
+std::vector<std::uint8_t> hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume,
+                                               ForEachNeighbour&& for_each_neighbour, std::size_t& handed_on) {
+  const std::size_t n_cells = S.m.size();
   std::vector<std::uint8_t> keep(n_cells, 0);
   const double min_mass = params.min_mass_ratio * *std::max_element(S.m.begin(), S.m.end());
   for (std::size_t c = 0; c < n_cells; ++c)
-    keep[c] = S.fill[c] > params.min_fill * cell_volume && S.m[c] > 0.0 && S.m[c] >= min_mass;
-  auto unflat = [&](std::size_t f) {
-    std::array<std::int64_t, D> idx;
-    for (int k = 0; k < D; ++k) {
-      const auto kk = static_cast<std::size_t>(k);
-      idx[kk] = range.lo[kk] + static_cast<std::int64_t>(f % static_cast<std::size_t>(count[kk]));
-      f /= static_cast<std::size_t>(count[kk]);
-    }
-    return idx;
-  };
-  // Each pass hands every cell that gets no particle to its fullest kept neighbour or, lacking one, to
-  // its heaviest neighbour that outweighs it; shares so flow towards kept cells along rising mass.
-  // Cells with no such neighbour at all keep their particle rather than lose their share.
+    keep[c] = S.fill[c] > params.min_fill * volume(c) && S.m[c] > 0.0 && S.m[c] >= min_mass;
   auto best_neighbour = [&](std::size_t c) {
-    const auto idx = unflat(c);
     std::int64_t kept_best = -1, heavy_best = -1;
     double best_fill = 0.0, best_mass = S.m[c];
-    std::array<std::int64_t, D> off{};
-    for (int k = 0; k < D; ++k) off[static_cast<std::size_t>(k)] = -1;
-    for (;;) {
-      std::array<std::int64_t, D> nb;
-      for (int k = 0; k < D; ++k)
-        nb[static_cast<std::size_t>(k)] = idx[static_cast<std::size_t>(k)] + off[static_cast<std::size_t>(k)];
-      const std::int64_t f = flat(nb);
-      if (f >= 0 && static_cast<std::size_t>(f) != c) {
-        const auto g = static_cast<std::size_t>(f);
-        if (keep[g] && S.fill[g] > best_fill) {
-          kept_best = f;
-          best_fill = S.fill[g];
-        }
-        if (!keep[g] && S.m[g] > best_mass) {
-          heavy_best = f;
-          best_mass = S.m[g];
-        }
+    for_each_neighbour(c, [&](std::size_t g) {
+      if (keep[g] && S.fill[g] > best_fill) {
+        kept_best = static_cast<std::int64_t>(g);
+        best_fill = S.fill[g];
       }
-      int k = 0;
-      for (; k < D; ++k) {
-        if (++off[static_cast<std::size_t>(k)] <= 1) break;
-        off[static_cast<std::size_t>(k)] = -1;
+      if (!keep[g] && S.m[g] > best_mass) {
+        heavy_best = static_cast<std::int64_t>(g);
+        best_mass = S.m[g];
       }
-      if (k == D) break;
-    }
+    });
     return kept_best >= 0 ? kept_best : heavy_best;
   };
+  handed_on = 0;
   for (bool moved = true; moved;) {
     moved = false;
     for (std::size_t c = 0; c < n_cells; ++c) {
@@ -359,34 +359,99 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
       S.m[c] = 0.0;
       S.mv[c] = Vec<D>::Zero();
       S.E[c] = 0.0;
-      ++stats.dropped_cells;
+      ++handed_on;
       moved = true;
     }
   }
   for (std::size_t c = 0; c < n_cells; ++c)
     if (!keep[c] && S.m[c] > 0.0) keep[c] = 1;  // no neighbour to take its share
+  return keep;
+}
 
-  // New particles in lattice order; u takes up the kinetic energy the averaging removed.
+/// Replaces `p` by one new particle per kept cell, in the order of `cells`: eq. (6) mass, eq. (8)
+/// velocity, and u taking up the kinetic energy the averaging removed (eq. 9). `place(c)` gives the
+/// site and smoothing length of cell c.
+template <int D, bool E, class Place>
+void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<std::uint8_t>& keep,
+                    const std::vector<std::size_t>& cells, Place&& place, RemapStats& stats) {
   double ke_before = 0.0, ke_after = 0.0;
-  for (std::size_t a = 0; a < n_old; ++a) ke_before += 0.5 * p.m[a] * p.v[a].squaredNorm();
+  for (std::size_t a = 0; a < p.n_real; ++a) ke_before += 0.5 * p.m[a] * p.v[a].squaredNorm();
   ParticleSet<D, E> fresh;
   std::size_t n_new = 0;
-  for (std::size_t c = 0; c < n_cells; ++c) n_new += keep[c] && S.m[c] > 0.0;
+  for (std::size_t c : cells) n_new += keep[c] && S.m[c] > 0.0;
   fresh.reserve(n_new);
-  const double h_new = params.h_over_dx * lattice.spacing;
-  for (std::size_t c = 0; c < n_cells; ++c) {
+  for (std::size_t c : cells) {
     if (!keep[c] || !(S.m[c] > 0.0)) continue;
     const double m_n = S.m[c];
     const Vec<D> v_n = S.mv[c] / m_n;  // eq. (8)
     const double ke = 0.5 * m_n * v_n.squaredNorm();
     ke_after += ke;
     const double e_n = std::max(0.0, (S.E[c] - ke) / m_n);  // eq. (9) plus the converted kinetic energy
-    auto idx = unflat(c);
-    fresh.add(m_n, lattice.site(box, idx), v_n, h_new, e_n);
+    const auto [site, h] = place(c);
+    fresh.add(m_n, site, v_n, h, e_n);
   }
+  stats.n_before = p.n_real;
   stats.n_after = fresh.n_real;
   stats.kinetic_converted = ke_before - ke_after;
   p = std::move(fresh);
+}
+
+/// Calls f(g) for the up to 3^D - 1 cells of `grid` around cell c (wrapping periodic axes).
+template <int D, class F>
+void for_each_grid_neighbour(const CellGrid<D>& grid, std::size_t c, F&& f) {
+  const auto idx = grid.unflat(c);
+  std::array<std::int64_t, D> off;
+  off.fill(-1);
+  for (;;) {
+    std::array<std::int64_t, D> nb;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) nb[k] = idx[k] + off[k];
+    const std::int64_t g = grid.flat(nb);
+    if (g >= 0 && static_cast<std::size_t>(g) != c) f(static_cast<std::size_t>(g));
+    std::size_t k = 0;
+    for (; k < static_cast<std::size_t>(D); ++k) {
+      if (++off[k] <= 1) break;
+      off[k] = -1;
+    }
+    if (k == static_cast<std::size_t>(D)) break;
+  }
+}
+
+template <class Lattice, int D, bool E>
+void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const RemapParams& params) {
+  static_assert(Lattice::dim == D, "the lattice's dimension differs from the particles'");
+  params.validate();
+  require(lattice.spacing > 0.0, "regularization: the lattice spacing must be positive");
+  require(p.n_ghost() == 0, "regularization: remove ghosts before remapping");
+  require(p.n_real > 0, "regularization: no particles to remap");
+}
+
+}  // namespace detail
+
+/// Remaps `p` (real particles only, no ghosts) onto `lattice`; returns the statistics. New particles
+/// are stored in lattice order with h = h_over_dx * Delta; u absorbs the kinetic energy lost when the
+/// gas carries it.
+template <class Lattice, class Builder, int D, bool E>
+RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
+                              const RemapParams& params) {
+  detail::check_remap_input(p, lattice, params);
+  const auto grid = detail::candidate_grid(p, box, lattice, params);
+  auto S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid);
+  RemapStats stats;
+  stats.max_volume_mismatch = S.max_mismatch;
+  const double cell_volume = lattice.cell_volume();
+  const auto keep = detail::hand_on_sparse_cells<D>(
+      S, params, [&](std::size_t) { return cell_volume; },
+      [&](std::size_t c, auto&& f) { detail::for_each_grid_neighbour(grid, c, f); }, stats.dropped_cells);
+  std::vector<std::size_t> order(grid.n_cells);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const double h_new = params.h_over_dx * lattice.spacing;
+  detail::emit_particles(
+      p, S, keep, order,
+      [&](std::size_t c) {
+        return std::pair{lattice.site(box, grid.unflat(c)), h_new};
+      },
+      stats);
+  stats.per_level = {stats.n_after};
   return stats;
 }
 

@@ -1,0 +1,215 @@
+#include "rsph/rsph.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <random>
+
+using namespace rsph;
+using regularize::remap_onto_lattice;
+using regularize::RemapParams;
+
+namespace {
+
+ParticleSet<2, true> jittered_gas(int n, double jitter, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  ParticleSet<2, true> p;
+  const double dx = 1.0 / n;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      p.add(dx * dx * (1.0 + 0.3 * u(rng)), Vec<2>((i + 0.5 + jitter * u(rng)) * dx, (j + 0.5 + jitter * u(rng)) * dx),
+            Vec<2>(u(rng), 0.5 * u(rng)), 1.2 * dx, 1.0 + 0.5 * u(rng));
+  return p;
+}
+
+Box<2> box_with(Edge ex, Edge ey) {
+  Box<2> b;
+  b.edge = {ex, ey};
+  return b;
+}
+
+/// x < x_split refined to `level`.
+auto left_of(double x_split, int level) {
+  return refine::region<2>([=](const Vec<2>& lo, const Vec<2>&) { return lo[0] < x_split; }, level);
+}
+
+template <int D, class Lattice>
+regularize::RemapStats conserving_remap(ParticleSet<D, true>& p, const Box<D>& box, Lattice& lattice,
+                                        RemapParams params = {}) {
+  const auto before = conservation(p);
+  double scale = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) scale += p.m[a] * p.v[a].norm();
+  geometry::LocalVoronoi builder;
+  const auto stats = remap_onto_lattice(p, box, lattice, builder, params);
+  const auto after = conservation(p);
+  CHECK(stats.max_volume_mismatch < 1e-12);
+  CHECK(std::abs(after.mass - before.mass) / before.mass < 1e-13);
+  CHECK((after.momentum - before.momentum).norm() <= 1e-13 * scale);
+  CHECK(std::abs(after.total_energy() - before.total_energy()) / before.total_energy() < 1e-13);
+  CHECK(stats.kinetic_converted >= -1e-15);
+  std::size_t sum = 0;
+  for (auto n : stats.per_level) sum += n;
+  CHECK(sum == p.n_real);
+  return stats;
+}
+
+/// Largest level difference between neighbouring blocks (diagonals included, periodic images when
+/// `periodic`).
+template <class ML>
+int worst_level_step(const ML& ml, std::int64_t nx, std::int64_t ny, bool periodic = true) {
+  int worst = 0;
+  for (const auto& [b, l] : ml.levels())
+    for (std::int64_t dj = -1; dj <= 1; ++dj)
+      for (std::int64_t di = -1; di <= 1; ++di) {
+        std::array<std::int64_t, 2> nb{b[0] + di, b[1] + dj};
+        if (periodic)
+          nb = {(nb[0] % nx + nx) % nx, (nb[1] % ny + ny) % ny};
+        else if (nb[0] < 0 || nb[0] >= nx || nb[1] < 0 || nb[1] >= ny)
+          continue;
+        worst = std::max(worst, std::abs(ml.levels().at(nb) - l));
+      }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("multi-level remap: a level-0 lattice reproduces the uniform remap exactly", "[regularize][multilevel]") {
+  auto p = jittered_gas(32, 0.4, 1);
+  auto q = p;
+  const auto box = box_with(Edge::periodic, Edge::reflecting);
+  geometry::LocalVoronoi builder;
+  remap_onto_lattice(p, box, lattice::Square{1.0 / 16}, builder, RemapParams{1.6});
+  lattice::MultiLevel<2, refine::Region<2, decltype(left_of(0.0, 0).meets)>> ml{1.0 / 16, 0, 4, left_of(0.5, 0)};
+  remap_onto_lattice(q, box, ml, builder, RemapParams{1.6});
+  REQUIRE(q.n_real == p.n_real);
+  // same cells, block order instead of row order: compare as sets keyed by site
+  std::map<std::pair<long, long>, std::size_t> at;
+  for (std::size_t a = 0; a < p.n_real; ++a) at[{std::lround(p.x[a][0] * 32), std::lround(p.x[a][1] * 32)}] = a;
+  for (std::size_t b = 0; b < q.n_real; ++b) {
+    const auto a = at.at({std::lround(q.x[b][0] * 32), std::lround(q.x[b][1] * 32)});
+    CHECK((q.x[b] - p.x[a]).norm() < 1e-14);
+    CHECK(q.m[b] == Approx(p.m[a]).epsilon(1e-12));
+    CHECK((q.v[b] - p.v[a]).norm() < 1e-11);
+    CHECK(q.h[b] == p.h[a]);
+  }
+}
+
+TEST_CASE("multi-level remap conserves mass, momentum and energy while levels change", "[regularize][multilevel]") {
+  for (auto box : {box_with(Edge::periodic, Edge::periodic), box_with(Edge::reflecting, Edge::reflecting)}) {
+    auto p = jittered_gas(48, 0.45, 2);
+    using Crit = refine::Region<2, std::function<bool(const Vec<2>&, const Vec<2>&)>>;
+    lattice::MultiLevel<2, Crit> ml{1.0 / 16, 2, 2,
+                                    Crit{[](const Vec<2>& lo, const Vec<2>&) { return lo[0] < 0.25; }, 2}};
+    auto stats = conserving_remap(p, box, ml, RemapParams{1.4});
+    // blocks of 2 level-0 cells (1/8): x < 0.25 on level 2, the next block column on level 1 (2:1; with
+    // periodic x also the last column), the rest on level 0
+    const bool periodic = box.periodic(0);
+    CHECK(stats.per_level[2] == 2 * 8 * 64);
+    CHECK(stats.per_level[1] == (periodic ? 2 : 1) * 8 * 16);
+    CHECK(stats.per_level[0] == (periodic ? 4 : 5) * 8 * 4);
+    // h follows the level
+    for (std::size_t a = 0; a < p.n_real; ++a) {
+      const double x = p.x[a][0];
+      const double dx = x < 0.25 ? 1.0 / 64 : (x < 0.375 || (periodic && x > 0.875) ? 1.0 / 32 : 1.0 / 16);
+      REQUIRE(p.h[a] == Approx(1.4 * dx));
+    }
+    // move the refined region: levels go up on the right and down on the left, still exactly conservative
+    ml.criterion.meets = [](const Vec<2>&, const Vec<2>& hi) { return hi[0] > 0.75; };
+    for (auto& v : p.v) v += Vec<2>(0.3, -0.1);
+    stats = conserving_remap(p, box, ml, RemapParams{1.4});
+    CHECK(stats.per_level[2] == 2 * 8 * 64);
+    CHECK(worst_level_step(ml, 8, 8, periodic) == 1);
+  }
+}
+
+TEST_CASE("2:1 balance holds and a criterion beyond the finest level is capped", "[regularize][multilevel]") {
+  auto p = jittered_gas(40, 0.3, 3);
+  const auto box = box_with(Edge::periodic, Edge::periodic);
+  using Crit = refine::Region<2, std::function<bool(const Vec<2>&, const Vec<2>&)>>;
+  // one block in a corner asks for level 5; the lattice stops at 3
+  lattice::MultiLevel<2, Crit> ml{
+      1.0 / 20, 3, 1, Crit{[](const Vec<2>& lo, const Vec<2>&) { return lo[0] < 1e-9 && lo[1] < 1e-9; }, 5}};
+  const auto stats = conserving_remap(p, box, ml);
+  CHECK(stats.capped_blocks == 1);
+  CHECK(stats.requested_level == 5);
+  CHECK(ml.levels().at({0, 0}) == 3);
+  CHECK(worst_level_step(ml, 20, 20) == 1);
+  // the periodic neighbours across the corner are balanced too
+  CHECK(ml.levels().at({19, 19}) == 2);
+  CHECK(ml.levels().at({18, 0}) == 1);
+  CHECK(ml.levels().at({3, 3}) == 0);
+  CHECK(stats.per_level[3] == 64);
+}
+
+TEST_CASE("target-mass criterion: levels follow the density, with hysteresis", "[regularize][multilevel]") {
+  // density 1 on the left half, 16 on the right: with the target mass equal to a level-0 particle of the
+  // light gas, the dense half goes to level 2 (mass 16 / 16 per particle)
+  ParticleSet<2, true> p;
+  const int n = 32;
+  const double dx = 1.0 / n;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double rho = i < n / 2 ? 1.0 : 16.0;
+      p.add(rho * dx * dx, Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), 1.2 * dx, 1.0);
+    }
+  const auto box = box_with(Edge::reflecting, Edge::periodic);
+  lattice::MultiLevel<2, refine::TargetMass> ml{1.0 / 16, 3, 2, refine::TargetMass{1.0 / 256, 0.25}};
+  auto q = p;
+  conserving_remap(q, box, ml);
+  CHECK(ml.levels().at({0, 0}) == 0);
+  CHECK(ml.levels().at({7, 3}) == 2);
+  CHECK(ml.levels().at({4, 3}) == 2);
+  CHECK(ml.levels().at({3, 3}) == 1);  // the 2:1 buffer next to the dense gas
+  // the dense gas thins to 2^1.8 = 3.48: it asks for level 0.9, which the hysteresis band (0.75, 2.25]
+  // of level 2 keeps on level 2, while a lattice without history rounds up to level 1
+  for (std::size_t a = 0; a < p.n_real; ++a)
+    if (p.x[a][0] > 0.5) p.m[a] *= std::pow(2.0, 1.8) / 16.0;
+  q = p;
+  conserving_remap(q, box, ml);
+  CHECK(ml.levels().at({7, 3}) == 2);
+  lattice::MultiLevel<2, refine::TargetMass> fresh{1.0 / 16, 3, 2, refine::TargetMass{1.0 / 256, 0.25}};
+  q = p;
+  conserving_remap(q, box, fresh);
+  CHECK(fresh.levels().at({7, 3}) == 1);
+  // thinning on to level 0.7 leaves the band: level 1 then
+  for (std::size_t a = 0; a < p.n_real; ++a)
+    if (p.x[a][0] > 0.5) p.m[a] *= std::pow(2.0, -0.4);
+  q = p;
+  conserving_remap(q, box, ml);
+  CHECK(ml.levels().at({7, 3}) == 1);
+}
+
+TEST_CASE("density-jump criterion refines a front and its hysteresis band", "[regularize][multilevel]") {
+  ParticleSet<2, true> p;
+  const int n = 64;
+  const double dx = 1.0 / n;
+  for (int j = 0; j < n / 4; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double rho = i < n / 2 ? 1.0 : 0.125;
+      p.add(rho * dx * dx, Vec<2>((i + 0.5) * dx, (j + 0.5) * dx), Vec<2>::Zero(), 1.2 * dx, 1.0);
+    }
+  Box<2> box = box_with(Edge::reflecting, Edge::periodic);
+  box.hi[1] = 0.25;
+  lattice::MultiLevel<2, refine::DensityJump> ml{1.0 / 32, 1, 4, refine::DensityJump{0.5, 0.1, 1}};
+  conserving_remap(p, box, ml);
+  // blocks of 4/32 = 1/8: the jump at x = 0.5 lies between blocks 3 and 4, each sees it through its halo
+  for (std::int64_t b = 0; b < 8; ++b) CHECK(ml.levels().at({b, 0}) == (b == 3 || b == 4 ? 1 : 0));
+}
+
+TEST_CASE("1D multi-level remap conserves and lays levels out in factors of two", "[regularize][multilevel]") {
+  ParticleSet<1, true> p;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  const int n = 200;
+  for (int i = 0; i < n; ++i) p.add(1.0 / n, Vec<1>((i + 0.5 + u(rng)) / n), Vec<1>(u(rng)), 1.2 / n, 1.0 + u(rng));
+  Box<1> box;
+  box.edge = {Edge::reflecting};
+  auto middle = refine::region<1>([](const Vec<1>& lo, const Vec<1>& hi) { return lo[0] < 0.6 && hi[0] > 0.4; }, 2);
+  lattice::MultiLevel<1, decltype(middle)> ml{1.0 / 50, 2, 5, middle};
+  const auto stats = conserving_remap(p, box, ml, RemapParams{2.0});
+  // blocks of 0.1: [0.4, 0.6] on level 2 (spacing 1/200), one level-1 block either side
+  CHECK(stats.per_level[2] == 40);
+  CHECK(stats.per_level[1] == 20);
+  CHECK(stats.per_level[0] == 30);
+  for (std::size_t a = 1; a < p.n_real; ++a) REQUIRE(p.x[a][0] > p.x[a - 1][0]);  // lattice order
+}
