@@ -1,4 +1,5 @@
-// rsph-sod: Sod's shock tube in 1D or as a 2D strip, plain SPH, against the exact Riemann solution.
+// rsph-sod: Sod's shock tube in 1D or as a 2D strip, plain SPH or RSPH (uniform or multi-level lattice),
+// against the exact Riemann solution.
 #include "common/cli.hpp"
 #include "common/run_helpers.hpp"
 #include "rsph/io/csv.hpp"
@@ -16,23 +17,25 @@ namespace {
 
 struct Options {
   scenes::SodParams sod;
+  scenes::RsphSodParams rsph;
+  std::string method = "sph";
   int dim = 1;
   std::string kernel = "cubic";
   int snapshots = 5;
   ex::CommonOptions common;
 };
 
-template <int D, class Kernel>
-int run(const Options& opt) {
+template <int D, class Kernel, class Sim>
+int run(const Options& opt, Sim sim) {
   const auto dir = ex::prepare_output(opt.common.out);
   const auto wall0 = std::chrono::steady_clock::now();
-  auto sim = scenes::make_sod<D, Kernel>(opt.sod);
   const analysis::ExactRiemann exact(opt.sod.left, opt.sod.right, opt.sod.gamma);
   const auto start = sim.totals();
 
   ex::ConservationLog<D> log(dir / "conservation.csv");
   log.record(sim.time(), sim.steps(), start);
-  io::Progress progress(fmt::format("rsph-sod {}D", D), opt.sod.t_end);
+  io::Progress progress(fmt::format("rsph-sod {}D {}", D, opt.method), opt.sod.t_end);
+  double particle_steps = 0.0;
   int snap = 0;
   const int n_snap = std::max(opt.snapshots, 1);
   auto write_snap = [&] {
@@ -43,6 +46,7 @@ int run(const Options& opt) {
   for (int k = 1; k <= n_snap; ++k) {
     const double t_next = opt.sod.t_end * k / n_snap;
     sim.run_until(t_next, [&](const auto& s) {
+      particle_steps += static_cast<double>(s.particles().n_real);
       log.record(s.time(), s.steps(), s.totals());
       if (!opt.common.quiet) progress.update(s.time(), s.steps());
     });
@@ -69,6 +73,7 @@ int run(const Options& opt) {
   const auto end = sim.totals();
   io::Json summary;
   summary.set("test", "sod")
+      .set("method", opt.method)
       .set("dim", D)
       .set("kernel", opt.kernel)
       .set("particles", static_cast<std::uint64_t>(p.n_real));
@@ -80,6 +85,12 @@ int run(const Options& opt) {
   summary.set("regularization_seconds", sim.phase_times().regularization);
   summary.set("phase_seconds", ex::phase_json(sim.phase_times()));
   summary.set("p_star_exact", exact.p_star()).set("v_star_exact", exact.v_star());
+  summary.set("mean_particles", particle_steps / static_cast<double>(std::max<std::uint64_t>(sim.steps(), 1)));
+  if constexpr (requires { sim.regularizer().log(); }) {
+    summary.set("regularizations", sim.regularizations());
+    summary.set("levels", ex::level_counts(sim.regularizer().log(), sim.steps()));
+    summary.set("max_level", opt.rsph.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
+  }
   summary.write(dir / "summary.json");
   fmt::print(
       "rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
@@ -89,11 +100,18 @@ int run(const Options& opt) {
   return 0;
 }
 
+template <int D, class Kernel>
+int run_method(const Options& opt) {
+  if (opt.method == "sph") return run<D, Kernel>(opt, scenes::make_sod<D, Kernel>(opt.sod));
+  if (opt.method == "rsph") return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel>(opt.sod, opt.rsph));
+  throw InputError("unknown method '" + opt.method + "' (sph, rsph)");
+}
+
 template <int D>
 int run_kernel(const Options& opt) {
-  if (opt.kernel == "cubic") return run<D, kernel::CubicSpline>(opt);
-  if (opt.kernel == "quintic") return run<D, kernel::QuinticSpline>(opt);
-  if (opt.kernel == "wendland") return run<D, kernel::WendlandC2>(opt);
+  if (opt.kernel == "cubic") return run_method<D, kernel::CubicSpline>(opt);
+  if (opt.kernel == "quintic") return run_method<D, kernel::QuinticSpline>(opt);
+  if (opt.kernel == "wendland") return run_method<D, kernel::WendlandC2>(opt);
   throw InputError("unknown kernel '" + opt.kernel + "' (cubic, quintic, wendland)");
 }
 
@@ -114,11 +132,23 @@ int main(int argc, char** argv) {
         "courant", ex::po::value(&opt.sod.courant)->default_value(0.3), "Courant factor")(
         "gamma", ex::po::value(&opt.sod.gamma)->default_value(1.4), "ratio of specific heats")(
         "kernel", ex::po::value(&opt.kernel)->default_value("cubic"), "cubic, quintic or wendland")(
-        "snapshots", ex::po::value(&opt.snapshots)->default_value(5), "HDF5 snapshots after the initial one");
+        "snapshots", ex::po::value(&opt.snapshots)->default_value(5), "HDF5 snapshots after the initial one")(
+        "method", ex::po::value(&opt.method)->default_value("sph"),
+        "sph: equal masses, grad-h; rsph: lattice regularization, levels in factors of two")(
+        "levels", ex::po::value(&opt.rsph.levels)->default_value(2),
+        "rsph: finest level L (0: uniform); the finest spacing is 0.5 / n-left")(
+        "block-cells", ex::po::value(&opt.rsph.block_cells)->default_value(2), "rsph: level-0 cells per block")(
+        "cycle", ex::po::value(&opt.rsph.cycle)->default_value(10), "rsph: steps between regularizations")(
+        "refine-above", ex::po::value(&opt.rsph.refine_above)->default_value(0.1),
+        "rsph: relative density jump between level-0 cells that refines a block")(
+        "coarsen-below", ex::po::value(&opt.rsph.coarsen_below)->default_value(0.03),
+        "rsph: jump below which a block returns to level 0")(
+        "h-ramp", ex::po::value(&opt.rsph.h_ramp)->default_value(2.0),
+        "rsph: coarser spacings over which h rises towards a coarser block (0: h jumps)");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
-                   "rsph-sod: Sod's shock tube with plain SPH against the exact solution.\n"
-                   "Usage: rsph-sod [--dim 1|2] [--preset quick|paper] [--out DIR] ..."))
+                   "rsph-sod: Sod's shock tube, plain SPH or RSPH, against the exact solution.\n"
+                   "Usage: rsph-sod [--dim 1|2] [--method sph|rsph] [--preset quick|paper] [--out DIR] ..."))
       return 0;
     if (ex::quick_preset(opt.common)) {
       if (vm["n-left"].defaulted()) opt.sod.n_left = 200;

@@ -78,4 +78,79 @@ requires(D == 1 || D == 2) SodSimulation<D, Kernel> make_sod(const SodParams& s)
                                   physics::ArtificialViscosity{s.alpha, s.beta}, physics::GradH<D>{s.h_over_dx});
 }
 
+/// RSPH on a lattice of levels 0..levels (levels = 0: uniform) with the density-jump criterion: the
+/// finest spacing is the SPH run's left spacing 0.5 / n_left, so a uniform run and a refined one
+/// share the finest resolution.
+struct RsphSodParams {
+  int levels = 2;               ///< finest level L; the level-0 spacing is 2^L times the finest
+  int block_cells = 2;          ///< level-0 cells per block and axis
+  std::uint64_t cycle = 10;     ///< regularize every `cycle` steps
+  double refine_above = 0.1;    ///< relative density jump between level-0 cells that refines a block
+  double coarsen_below = 0.03;  ///< ... and the jump below which it returns to level 0
+  double h_ramp = 2.0;          ///< coarser spacings over which h rises towards a coarser block
+  void validate() const {
+    require(levels >= 0 && levels <= 8, "Sod RSPH: --levels must lie in [0, 8]");
+    require(block_cells >= 1, "Sod RSPH: --block-cells must be at least 1");
+    require(cycle >= 1, "Sod RSPH: --cycle must be at least 1");
+  }
+};
+
+template <int D, class Kernel>
+using RsphSodRegularizer =
+    regularize::LatticeRegularizer<lattice::MultiLevel<D, refine::DensityJump>, schedule::EveryNSteps>;
+template <int D, class Kernel>
+using RsphSodSimulation =
+    Simulation<D, Kernel, eos::IdealGas, RsphSodRegularizer<D, Kernel>, physics::ArtificialViscosity>;
+
+/// The tube on the finest lattice everywhere, then one remap onto the multi-level lattice, which puts
+/// the membrane on the finest level and the uniform states on level 0.
+template <int D, class Kernel>
+requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel> make_rsph_sod(const SodParams& s, const RsphSodParams& r) {
+  s.validate();
+  r.validate();
+  const eos::IdealGas gas{s.gamma};
+  gas.validate();
+  const double dx = 0.5 / s.n_left;
+  const std::int64_t fine_per_block = (std::int64_t{1} << r.levels) * r.block_cells;
+  const double block = dx * static_cast<double>(fine_per_block);
+  require(std::abs(1.0 / block - std::round(1.0 / block)) < 1e-9,
+          "Sod RSPH: the tube length must be a whole number of blocks (2 n_left = " + std::to_string(2 * s.n_left) +
+              " must be a multiple of 2^levels * block_cells = " + std::to_string(fine_per_block) + ")");
+  Box<D> box;
+  box.lo.setZero();
+  box.hi.setOnes();
+  box.edge[0] = Edge::reflecting;
+  int ny = 1;
+  if constexpr (D == 2) {
+    // the strip: ny_left finest rows, rounded up to whole blocks
+    ny = static_cast<int>(((s.ny_left + fine_per_block - 1) / fine_per_block) * fine_per_block);
+    box.hi[1] = ny * dx;
+    box.edge[1] = Edge::periodic;
+  }
+  ParticleSet<D, true> p;
+  const int nx = 2 * s.n_left;
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      Vec<D> x;
+      x[0] = (i + 0.5) * dx;
+      if constexpr (D == 2) x[1] = (j + 0.5) * dx;
+      const auto& state = x[0] < 0.5 ? s.left : s.right;
+      Vec<D> v = Vec<D>::Zero();
+      v[0] = state.v;
+      p.add(state.rho * std::pow(dx, D), x, v, s.h_over_dx * dx, gas.internal_energy(state.rho, state.P));
+    }
+  const double dx0 = dx * static_cast<double>(std::int64_t{1} << r.levels);
+  lattice::MultiLevel<D, refine::DensityJump> ml(dx0, r.levels, r.block_cells,
+                                                 refine::DensityJump{r.refine_above, r.coarsen_below, r.levels});
+  ml.h_ramp = r.h_ramp;
+  const regularize::RemapParams remap{s.h_over_dx};
+  geometry::LocalVoronoi builder;
+  regularize::remap_onto_lattice(p, box, ml, builder, remap);
+  TimeStepParams ts;
+  ts.courant = s.courant;
+  return RsphSodSimulation<D, Kernel>(
+      std::move(p), box, gas, RsphSodRegularizer<D, Kernel>(std::move(ml), schedule::EveryNSteps{r.cycle}, remap), ts,
+      physics::ArtificialViscosity{s.alpha, s.beta});
+}
+
 }  // namespace rsph::scenes

@@ -34,6 +34,9 @@ struct MultiLevel {
   int max_level;    ///< the finest level L
   int block_cells;  ///< level-0 cells per block and axis
   Criterion criterion;
+  /// Width, in spacings of the coarser level, over which h of a finer block rises towards the coarser
+  /// block's h next to it (0: h jumps at the block face).
+  double h_ramp = 0.0;
 
   MultiLevel(double spacing_0, int finest_level, int cells_per_block, Criterion c)
       : spacing(spacing_0), max_level(finest_level), block_cells(cells_per_block), criterion(std::move(c)) {}
@@ -44,6 +47,8 @@ struct MultiLevel {
                                                                   std::to_string(deepest_supported) + "] (got " +
                                                                   std::to_string(max_level) + ")");
     require(block_cells >= 1, "multi-level lattice: a block needs at least one level-0 cell per axis");
+    require(h_ramp >= 0.0 && h_ramp <= block_cells,
+            "multi-level lattice: the h ramp must lie in [0, block_cells] coarser spacings");
     if constexpr (requires { criterion.validate(); }) criterion.validate();
   }
   double spacing_at(int level) const { return spacing / static_cast<double>(std::int64_t{1} << level); }
@@ -68,6 +73,35 @@ struct MultiLevel {
 namespace regularize {
 namespace detail {
 
+/// Calls f(g, off) for every block g next to block b (diagonals and periodic images included; b itself
+/// with off = 0), where off is g's offset from b in blocks.
+template <int D, class F>
+void for_each_neighbour_block(const refine::BlockField<D>& field, std::size_t b, F&& f) {
+  const auto bi = field.block_index(b);
+  std::array<std::int64_t, D> off;
+  off.fill(-1);
+  for (;;) {
+    std::size_t g = 0;
+    bool inside = true;
+    for (int k = D - 1; k >= 0; --k) {
+      const auto kk = static_cast<std::size_t>(k);
+      std::int64_t i = bi[kk] + off[kk];
+      if (field.periods[kk] > 0)
+        i = ((i % field.blocks[kk]) + field.blocks[kk]) % field.blocks[kk];
+      else if (i < 0 || i >= field.blocks[kk])
+        inside = false;
+      g = g * static_cast<std::size_t>(field.blocks[kk]) + static_cast<std::size_t>(std::max<std::int64_t>(i, 0));
+    }
+    if (inside) f(g, off);
+    std::size_t k = 0;
+    for (; k < static_cast<std::size_t>(D); ++k) {
+      if (++off[k] <= 1) break;
+      off[k] = -1;
+    }
+    if (k == static_cast<std::size_t>(D)) break;
+  }
+}
+
 /// Raises levels until neighbouring blocks differ by at most one (refinement wins over coarsening).
 template <int D>
 std::size_t balance_two_to_one(const refine::BlockField<D>& field, std::vector<int>& level) {
@@ -75,34 +109,8 @@ std::size_t balance_two_to_one(const refine::BlockField<D>& field, std::vector<i
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t b = 0; b < field.n_blocks(); ++b) {
-      const auto bi = field.block_index(b);
       int need = level[b];
-      std::array<std::int64_t, D> off;
-      off.fill(-1);
-      for (;;) {
-        std::array<std::int64_t, D> nb;
-        bool inside = true;
-        for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
-          nb[k] = bi[k] + off[k];
-          if (field.periods[k] > 0)
-            nb[k] = ((nb[k] % field.blocks[k]) + field.blocks[k]) % field.blocks[k];
-          else if (nb[k] < 0 || nb[k] >= field.blocks[k])
-            inside = false;
-        }
-        if (inside) {
-          std::size_t g = 0;
-          for (int k = D - 1; k >= 0; --k)
-            g = g * static_cast<std::size_t>(field.blocks[static_cast<std::size_t>(k)]) +
-                static_cast<std::size_t>(nb[static_cast<std::size_t>(k)]);
-          need = std::max(need, level[g] - 1);
-        }
-        std::size_t k = 0;
-        for (; k < static_cast<std::size_t>(D); ++k) {
-          if (++off[k] <= 1) break;
-          off[k] = -1;
-        }
-        if (k == static_cast<std::size_t>(D)) break;
-      }
+      for_each_neighbour_block(field, b, [&](std::size_t g, const auto&) { need = std::max(need, level[g] - 1); });
       if (need > level[b]) {
         level[b] = need;
         ++raised;
@@ -111,6 +119,27 @@ std::size_t balance_two_to_one(const refine::BlockField<D>& field, std::vector<i
     }
   }
   return raised;
+}
+
+/// Distance from x (in block b) to the nearest block next to b on a coarser level than b; `none` when
+/// no neighbour is coarser.
+template <int D>
+double distance_to_coarser_block(const refine::BlockField<D>& field, const std::vector<int>& level, std::size_t b,
+                                 const Vec<D>& x, double none) {
+  double best = none;
+  const Vec<D> lo = field.block_lo(b);
+  for_each_neighbour_block(field, b, [&](std::size_t g, const std::array<std::int64_t, D>& off) {
+    if (level[g] >= level[b]) return;
+    // the neighbour's box, placed next to b (periodic images included)
+    double d2 = 0.0;
+    for (int k = 0; k < D; ++k) {
+      const double a = lo[k] + static_cast<double>(off[static_cast<std::size_t>(k)]) * field.block_size();
+      const double gap = std::max({a - x[k], 0.0, x[k] - (a + field.block_size())});
+      d2 += gap * gap;
+    }
+    best = std::min(best, std::sqrt(d2));
+  });
+  return best;
 }
 
 }  // namespace detail
@@ -269,13 +298,29 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
 
   std::vector<std::size_t> order(n_cells);
   std::iota(order.begin(), order.end(), std::size_t{0});
+  std::vector<std::size_t> block_of(n_cells);
+  {
+    std::size_t c = 0;
+    for (std::size_t b = 0; b < n_blocks; ++b) {
+      const auto n = static_cast<std::size_t>(std::pow(static_cast<double>(align >> (ml.max_level - level[b])), D));
+      for (std::size_t i = 0; i < n; ++i) block_of[c++] = b;
+    }
+  }
   auto place = [&](std::size_t c) {
     const double dx = fine.spacing;
     Vec<D> site;
     for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k)
       site[static_cast<int>(k)] = field.origin[static_cast<int>(k)] +
                                   (static_cast<double>(first_fine[c][k]) + 0.5 * static_cast<double>(span[c])) * dx;
-    return std::pair{site, params.h_over_dx * ml.spacing_at(cell_level[c])};
+    const int l = cell_level[c];
+    double h = params.h_over_dx * ml.spacing_at(l);
+    if (ml.h_ramp > 0.0 && l > 0) {
+      // distance to the nearest coarser neighbouring block (2:1 balance: one level coarser)
+      const double ramp = ml.h_ramp * ml.spacing_at(l - 1);
+      const double d = detail::distance_to_coarser_block(field, level, block_of[c], site, ramp);
+      if (d < ramp) h += (params.h_over_dx * ml.spacing_at(l - 1) - h) * (1.0 - d / ramp);
+    }
+    return std::pair{site, h};
   };
   detail::emit_particles(p, cells, keep, order, place, stats);
 
