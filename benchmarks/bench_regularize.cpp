@@ -75,6 +75,28 @@ void BM_remap(benchmark::State& state) {
   state.SetComplexityN(static_cast<std::int64_t>(p0.n_real));
 }
 
+// The same remap onto a two-level lattice: level-0 spacing 2 Delta, the left half refined to Delta, so the
+// overlaps are taken on the finest lattice everywhere and summed into the coarse cells.
+void BM_remap_two_levels(benchmark::State& state) {
+  bench::use_threads(state);
+  const auto p0 = make_set(state.range(0), static_cast<int>(state.range(1)));
+  const double dx = 1.0 / std::lround(std::sqrt(static_cast<double>(p0.n_real)));
+  geometry::LocalVoronoi builder;
+  auto left_half = refine::region<2>([](const Vec<2>& lo, const Vec<2>&) { return lo[0] < 0.5; }, 1);
+  lattice::MultiLevel<2, decltype(left_half)> ml(2.0 * dx, 1, 1, left_half);
+  std::size_t n_after = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    auto p = p0;
+    state.ResumeTiming();
+    n_after = regularize::remap_onto_lattice(p, domain(), ml, builder, regularize::RemapParams{}).n_after;
+    benchmark::DoNotOptimize(n_after);
+  }
+  state.counters["new_particles"] = static_cast<double>(n_after);
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p0.n_real));
+  state.SetComplexityN(static_cast<std::int64_t>(p0.n_real));
+}
+
 // One family per (layout, threads), so each complexity fit sees one scaling curve in N.
 // Arguments: {particles, layout (0 jittered, 1 sheared), threads (0: all)}.
 template <class Fn>
@@ -95,6 +117,7 @@ int main(int argc, char** argv) {
   register_family("cells_local", BM_cells<geometry::LocalVoronoi>);
   register_family("cells_boost_polygon", BM_cells<geometry::BoostVoronoi>);
   register_family("remap", BM_remap);
+  register_family("remap_two_levels", BM_remap_two_levels);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
