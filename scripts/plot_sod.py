@@ -19,17 +19,22 @@ def main():
         parts = read_csv(os.path.join(d, "particles.csv"))
         exact = read_csv(os.path.join(d, "exact.csv"))
         s = read_summary(d)
+        method = s.get("method", "sph")
+        if method == "rsph":
+            name = f"RSPH, levels 0-{s['max_level']}" if s.get("max_level", 0) > 0 else "RSPH, uniform lattice"
+        else:
+            name = "grad-h SPH"
         for ax, key, label, err in zip(row, ["rho", "v", "P"], [r"$\rho$", "$v_x$", "$P$"], ["L1_rho", "L1_v", "L1_P"]):
-            ax.plot(parts["x"], parts[key], ".", ms=2, color="tab:blue", label="SPH particles")
+            ax.plot(parts["x"], parts[key], ".", ms=2, color="tab:blue", label="particles")
             ax.plot(exact["x"], exact[key], "-", lw=1, color="k", label="exact")
             ax.set_xlabel("x")
             ax.set_ylabel(label)
-            ax.set_title(f"{s['dim']}D, {s['particles']} particles: L1 = {s[err]:.2e}", fontsize=9)
+            ax.set_title(f"{name}, {s['dim']}D, {s['particles']} particles: L1 = {s[err]:.2e}", fontsize=9)
         row[0].legend(fontsize=8)
         row[2].text(0.02, 0.05, f"{s['steps']} steps, {s['wall_seconds']:.2f} s\n"
                     f"{s['particle_updates_per_second']:.3g} particle updates/s", transform=row[2].transAxes,
                     fontsize=8)
-    fig.suptitle("Sod shock tube at t = 0.2: grad-h SPH (cubic spline, alpha = 1, beta = 2) vs exact solution")
+    fig.suptitle("Sod shock tube at t = 0.2 (cubic spline, alpha = 1, beta = 2) vs exact solution")
     save_figure(fig, args.png)
 
 
