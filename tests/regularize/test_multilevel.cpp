@@ -4,29 +4,15 @@
 
 #include <random>
 
+#include "particle_sets.hpp"
+
 using namespace rsph;
 using regularize::remap_onto_lattice;
 using regularize::RemapParams;
+using test::box_with;
+using test::jittered_gas;
 
 namespace {
-
-ParticleSet<2, true> jittered_gas(int n, double jitter, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  ParticleSet<2, true> p;
-  const double dx = 1.0 / n;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i)
-      p.add(dx * dx * (1.0 + 0.3 * u(rng)), Vec<2>((i + 0.5 + jitter * u(rng)) * dx, (j + 0.5 + jitter * u(rng)) * dx),
-            Vec<2>(u(rng), 0.5 * u(rng)), 1.2 * dx, 1.0 + 0.5 * u(rng));
-  return p;
-}
-
-Box<2> box_with(Edge ex, Edge ey) {
-  Box<2> b;
-  b.edge = {ex, ey};
-  return b;
-}
 
 /// x < x_split refined to `level`.
 auto left_of(double x_split, int level) {

@@ -4,33 +4,15 @@
 
 #include <random>
 
+#include "particle_sets.hpp"
+
 using namespace rsph;
 using regularize::remap_onto_lattice;
 using regularize::RemapParams;
+using test::box_with;
+using test::jittered_gas;
 
 namespace {
-
-template <bool E = true>
-ParticleSet<2, E> jittered_gas(int n, double jitter, unsigned seed, double shear = 0.0) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  ParticleSet<2, E> p;
-  const double dx = 1.0 / n;
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      double x = (i + 0.5 + jitter * u(rng)) * dx + shear * ((j + 0.5) * dx - 0.5);
-      x -= std::floor(x);
-      p.add(dx * dx * (1.0 + 0.3 * u(rng)), Vec<2>(x, (j + 0.5 + jitter * u(rng)) * dx), Vec<2>(u(rng), 0.5 * u(rng)),
-            1.2 * dx, 1.0 + 0.5 * u(rng));
-    }
-  return p;
-}
-
-Box<2> box_with(Edge ex, Edge ey) {
-  Box<2> b;
-  b.edge = {ex, ey};
-  return b;
-}
 
 template <int D, bool E, class Lattice, class Builder = geometry::LocalVoronoi>
 regularize::RemapStats check_conserving_remap(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
