@@ -56,8 +56,6 @@ struct MultiLevel {
 
   /// Levels of the blocks at the last regularization, by block index (hysteresis reads them).
   const std::map<std::array<std::int64_t, D>, int>& levels() const { return levels_; }
-  /// Sets a block's level as if a regularization had left it (used to seed hysteresis).
-  void set_level(std::array<std::int64_t, D> block, int level) { levels_[block] = level; }
   int previous_level(const std::array<std::int64_t, D>& block) const {
     const auto it = levels_.find(block);
     return it == levels_.end() ? refine::no_previous_level : it->second;
@@ -104,8 +102,7 @@ void for_each_neighbour_block(const refine::BlockField<D>& field, std::size_t b,
 
 /// Raises levels until neighbouring blocks differ by at most one (refinement wins over coarsening).
 template <int D>
-std::size_t balance_two_to_one(const refine::BlockField<D>& field, std::vector<int>& level) {
-  std::size_t raised = 0;
+void balance_two_to_one(const refine::BlockField<D>& field, std::vector<int>& level) {
   for (bool changed = true; changed;) {
     changed = false;
     for (std::size_t b = 0; b < field.n_blocks(); ++b) {
@@ -113,12 +110,10 @@ std::size_t balance_two_to_one(const refine::BlockField<D>& field, std::vector<i
       for_each_neighbour_block(field, b, [&](std::size_t g, const auto&) { need = std::max(need, level[g] - 1); });
       if (need > level[b]) {
         level[b] = need;
-        ++raised;
         changed = true;
       }
     }
   }
-  return raised;
 }
 
 /// Distance from x (in block b) to the nearest block next to b on a coarser level than b; `none` when
