@@ -22,14 +22,20 @@ struct Record {
   double seconds = 0.0;
 };
 
-template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi>
+template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi, class Region = region::Unbounded>
 class LatticeRegularizer {
  public:
-  explicit LatticeRegularizer(Lattice lattice, Schedule schedule, RemapParams params = {}, Builder builder = {})
-      : lattice_(std::move(lattice)), schedule_(std::move(schedule)), params_(params), builder_(std::move(builder)) {}
+  explicit LatticeRegularizer(Lattice lattice, Schedule schedule, RemapParams params = {}, Builder builder = {},
+                              Region region = {})
+      : lattice_(std::move(lattice)),
+        schedule_(std::move(schedule)),
+        params_(params),
+        builder_(std::move(builder)),
+        region_(std::move(region)) {}
 
   void validate() const {
     params_.validate();
+    if constexpr (requires { region_.validate(); }) region_.validate();
     require(lattice_.spacing > 0.0, "regularization: the lattice spacing Delta must be positive");
     if constexpr (requires { schedule_.validate(); }) schedule_.validate();
   }
@@ -50,7 +56,7 @@ class LatticeRegularizer {
     Record r;
     r.step = last_.step;
     r.time = last_.time;
-    r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_);
+    r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_, region_);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     log_.push_back(r);
     return r.stats.kinetic_converted;
@@ -66,6 +72,7 @@ class LatticeRegularizer {
   Schedule schedule_;
   RemapParams params_;
   Builder builder_;
+  Region region_;
   StepInfo last_;
   std::vector<Record> log_;
 };

@@ -143,9 +143,9 @@ double distance_to_coarser_block(const refine::BlockField<D>& field, const std::
 /// finest level, 2:1 balanced), then builds one particle per kept cell, block by block and in lattice
 /// order within a block, with h = h_over_dx * Delta_l. Mass, momentum and total energy are conserved
 /// exactly as on a uniform lattice.
-template <int D, class Criterion, class Builder, bool E>
+template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
-                              Builder& builder, const RemapParams& params) {
+                              Builder& builder, const RemapParams& params, const Region& region = {}) {
   ml.validate();
   const auto fine = ml.finest();
   detail::check_remap_input(p, fine, params);
@@ -159,7 +159,7 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
                   " must be a whole number of blocks (block size " + std::to_string(ml.spacing * ml.block_cells) + ")");
     }
   const auto grid = detail::candidate_grid(p, box, fine, params, align);
-  auto S = detail::accumulate_overlaps(p, box, fine, builder, params, grid);
+  auto S = detail::accumulate_overlaps(p, box, fine, builder, params, grid, region);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
 

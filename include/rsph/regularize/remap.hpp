@@ -7,6 +7,7 @@
 #include "rsph/geometry/polygon.hpp"
 #include "rsph/geometry/voronoi.hpp"
 #include "rsph/regularize/lattice.hpp"
+#include "rsph/regularize/region.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -184,9 +185,11 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
 
 /// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
 /// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
-template <class Lattice, class Builder, int D, bool E>
+template <class Lattice, class Builder, int D, bool E, class Region = region::Unbounded>
 Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
-                            const RemapParams& params, const CellGrid<D>& grid) {
+                            const RemapParams& params, const CellGrid<D>& grid, const Region& region = {}) {
+  static_assert(check_closing_region<Region>());
+  static_assert(D == 2 || !Region::clips, "closing regions are two-dimensional");
   const std::size_t n_old = p.n_real;
   const auto& range = grid.range;
   auto flat = [&](std::array<std::int64_t, D> idx) { return grid.flat(idx); };
@@ -261,6 +264,7 @@ Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const
       const Lattice* lattice;
       const Box<2>* box;
       const CellGrid<2>* grid;
+      const Region* region;
       std::vector<std::vector<std::pair<std::size_t, double>>> overlaps;
 
       std::array<std::int64_t, 2> clamp_to_walls(std::array<std::int64_t, 2> idx) const {
@@ -273,6 +277,15 @@ Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const
         for (auto& s : *sums) s.resize(s.m.size());
       }
       void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
+        if constexpr (Region::clips) {
+          geometry::ConvexPolygon closed = cell;
+          region->clip(p->x[a], closed);
+          add_cell(thread, a, closed);
+        } else {
+          add_cell(thread, a, cell);
+        }
+      }
+      void add_cell(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
         auto& ov = overlaps[static_cast<std::size_t>(thread)];
         ov.clear();
         const Vec<2> xo = p->x[a];
@@ -305,9 +318,13 @@ Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const
         (*sums)[static_cast<std::size_t>(thread)].add(ov, p->m[a], p->v[a], e_o, cell_area);
       }
     };
-    Visitor visitor{
-        &sums, &p,    &lattice,
-        &box,  &grid, std::vector<std::vector<std::pair<std::size_t, double>>>(static_cast<std::size_t>(n_threads))};
+    Visitor visitor{&sums,
+                    &p,
+                    &lattice,
+                    &box,
+                    &grid,
+                    &region,
+                    std::vector<std::vector<std::pair<std::size_t, double>>>(static_cast<std::size_t>(n_threads))};
     builder.build(p.x, box, closing, visitor);
   }
 
@@ -429,13 +446,13 @@ void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const
 
 /// Remaps `p` (real particles only, no ghosts) onto `lattice`; returns the statistics. New particles
 /// are stored in lattice order with h = h_over_dx * Delta; u absorbs the kinetic energy lost when the
-/// gas carries it.
-template <class Lattice, class Builder, int D, bool E>
+/// gas carries it. `region` closes the cells at open edges (region.hpp).
+template <class Lattice, class Builder, int D, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
-                              const RemapParams& params) {
+                              const RemapParams& params, const Region& region = {}) {
   detail::check_remap_input(p, lattice, params);
   const auto grid = detail::candidate_grid(p, box, lattice, params);
-  auto S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid);
+  auto S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
   const double cell_volume = lattice.cell_volume();
