@@ -1,12 +1,14 @@
 #pragma once
 // Umbrella header of the rsph engine (Eigen and Boost headers only). I/O lives in rsph/io/ and needs
 // the rsph::io target (HDF5, fmt).
+#include "rsph/analysis/disk.hpp"
 #include "rsph/analysis/fit.hpp"
 #include "rsph/analysis/riemann.hpp"
 #include "rsph/analysis/shock_tube.hpp"
 #include "rsph/analysis/viscous_ring.hpp"
 #include "rsph/boundary/frozen.hpp"
 #include "rsph/boundary/ghosts.hpp"
+#include "rsph/boundary/keplerian_zones.hpp"
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
@@ -33,11 +35,13 @@
 #include "rsph/physics/point_mass.hpp"
 #include "rsph/physics/shear_viscosity.hpp"
 #include "rsph/physics/smoothing_length.hpp"
+#include "rsph/physics/star_planet.hpp"
 #include "rsph/regularize/concept.hpp"
 #include "rsph/regularize/lattice.hpp"
 #include "rsph/regularize/lattice_regularizer.hpp"
 #include "rsph/regularize/multilevel.hpp"
 #include "rsph/regularize/refinement.hpp"
+#include "rsph/regularize/region.hpp"
 #include "rsph/regularize/remap.hpp"
 #include "rsph/regularize/schedule.hpp"
 #include "rsph/simulation.hpp"

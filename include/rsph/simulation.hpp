@@ -57,6 +57,8 @@ class Simulation {
   /// A viscous stress term (Navier-Stokes) adds a velocity-gradient pass before the force sum.
   static constexpr bool has_stress = (StressTerm<Terms, D> || ...);
   static_assert((int(StressTerm<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one viscous stress term");
+  /// Boundary zones (gas on fixed orbits) choose their members whenever the particle set is rebuilt.
+  static constexpr bool has_zones = (BoundaryZone<Terms, D> || ...);
   using Particles = ParticleSet<D, has_energy>;
   using KernelType = Kernel;
 
@@ -68,6 +70,7 @@ class Simulation {
         params_(params),
         terms_(std::move(terms)...) {
     validate();
+    mark_zone_members();
     compute_rates();
   }
 
@@ -119,7 +122,7 @@ class Simulation {
       }
     }
     time_ += dt;
-    prescribe_frozen();
+    prescribe_frozen(dt);
     times_.integrate += seconds_since(t0);
     compute_rates();
     t0 = clock::now();
@@ -136,7 +139,10 @@ class Simulation {
     info_.step = step_;
     info_.time = time_;
     info_.neighbors = &nl_;
-    if (reg_.due(p_, box_, info_)) regularize_now();
+    t0 = clock::now();
+    const bool due = reg_.due(p_, box_, info_);  // an adaptive schedule's check is regularization cost too
+    times_.regularization += seconds_since(t0);
+    if (due) regularize_now();
     if (params_.check_every_step) check_physical();
     return dt;
   }
@@ -146,6 +152,7 @@ class Simulation {
     const auto t0 = clock::now();
     p_.clear_ghosts();
     kinetic_removed_ += reg_.remap(p_, box_);
+    mark_zone_members();
     ++regularizations_;
     info_.steps_since_last = 0;
     info_.time_since_last = 0.0;
@@ -431,18 +438,44 @@ class Simulation {
       for (std::size_t g = n; g < p_.size(); ++g) Omega_[g] = Omega_[p_.ghost_source[g - n]];
   }
 
-  void prescribe_frozen() {
+  void prescribe_frozen(double dt) {
     std::apply(
         [&](const auto&... term) {
           auto apply_motion = [&](const auto& t) {
-            if constexpr (PrescribedMotion<std::decay_t<decltype(t)>, D>)
+            using T = std::decay_t<decltype(t)>;
+            if constexpr (PrescribedMotion<T, D>)
               for (std::size_t a = 0; a < p_.n_real; ++a)
                 if (p_.frozen[a]) t.prescribe(a, p_.x[a], p_.v[a], time_);
+            if constexpr (BoundaryZone<T, D>) {
+              const std::size_t n = p_.n_real;
+#pragma omp parallel for schedule(static)
+              for (std::size_t a = 0; a < n; ++a)
+                if (p_.frozen[a] && t.contains(p_.x[a])) t.advance(p_.x[a], p_.v[a], dt);
+            }
           };
           (apply_motion(term), ...);
           (void)apply_motion;  // unused when the scene names no terms
         },
         terms_);
+  }
+
+  /// Flags the particles inside a boundary zone as frozen (other flags stay); their velocity is the zone's.
+  void mark_zone_members() {
+    if constexpr (has_zones)
+      std::apply(
+          [&](const auto&... term) {
+            auto mark = [&](const auto& t) {
+              if constexpr (BoundaryZone<std::decay_t<decltype(t)>, D>)
+                for (std::size_t a = 0; a < p_.n_real; ++a)
+                  if (t.contains(p_.x[a])) {
+                    p_.frozen[a] = 1;
+                    Vec<D> x = p_.x[a];
+                    t.advance(x, p_.v[a], 0.0);
+                  }
+            };
+            (mark(term), ...);
+          },
+          terms_);
   }
 
   // A particle that crossed a reflecting wall is mirrored back; one that left a periodic axis re-enters.

@@ -94,6 +94,37 @@ struct ParticleSet {
     frozen.resize(n);
   }
 
+  /// Removes every ghost and the real particles for which remove(a) holds; the rest keep their order.
+  /// Returns how many were removed.
+  template <class Predicate>
+  std::size_t erase_if(Predicate&& remove) {
+    clear_ghosts();
+    std::size_t kept = 0;
+    for (std::size_t a = 0; a < n_real; ++a) {
+      if (remove(a)) continue;
+      if (kept != a) {
+        m[kept] = m[a];
+        rho[kept] = rho[a];
+        h[kept] = h[a];
+        P[kept] = P[a];
+        cs[kept] = cs[a];
+        x[kept] = x[a];
+        v[kept] = v[a];
+        dv_dt[kept] = dv_dt[a];
+        if constexpr (HasEnergy) {
+          u[kept] = u[a];
+          du_dt[kept] = du_dt[a];
+        }
+        frozen[kept] = frozen[a];
+      }
+      ++kept;
+    }
+    const std::size_t removed = n_real - kept;
+    resize_all(kept);
+    n_real = kept;
+    return removed;
+  }
+
   void reserve(std::size_t n) {
     m.reserve(n);
     rho.reserve(n);

@@ -44,9 +44,17 @@ concept PrescribedMotion = requires(const T& t, std::size_t i, Vec<D>& x, Vec<D>
   t.prescribe(i, x, v, time);
 };
 
+/// A region whose gas moves on fixed orbits (the disk's boundary zones of §5.1): members are chosen by
+/// position whenever the particle set is rebuilt and turned by advance(x, v, dt) instead of integrated.
 template <class T, int D>
-concept Term =
-    PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> || PrescribedMotion<T, D>;
+concept BoundaryZone = requires(const T& t, const Vec<D>& x, Vec<D>& x_mut, Vec<D>& v, double dt) {
+  { t.contains(x) } -> std::same_as<bool>;
+  t.advance(x_mut, v, dt);
+};
+
+template <class T, int D>
+concept Term = PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> ||
+    PrescribedMotion<T, D> || BoundaryZone<T, D>;
 
 template <class T, int D>
 constexpr bool check_term() {
@@ -55,7 +63,9 @@ constexpr bool check_term() {
                 "`Mat<D> stress(const Mat<D>& grad_v, double rho) const` with `double signal_speed(double h) const` "
                 "(viscous stress), `Vec<D> acceleration(const Vec<D>& x, double t) const` (body force), "
                 "`solves_smoothing_length` with `rho_of_h` and `h_of_rho` (adaptive h), or "
-                "`void prescribe(size_t i, Vec<D>& x, Vec<D>& v, double t) const` (prescribed motion)");
+                "`void prescribe(size_t i, Vec<D>& x, Vec<D>& v, double t) const` (prescribed motion), or "
+                "`bool contains(const Vec<D>&) const` with `void advance(Vec<D>& x, Vec<D>& v, double dt) const` "
+                "(boundary zone)");
   return true;
 }
 

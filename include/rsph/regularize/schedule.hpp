@@ -68,7 +68,9 @@ struct Adaptive {
   template <bool E>
   std::vector<double> neighbour_numbers(const ParticleSet<D, E>& p, const neighbors::NeighborList& nl) const {
     std::vector<double> N(p.n_real);
-    for (std::size_t a = 0; a < p.n_real; ++a) {
+    const std::size_t n = p.n_real;
+#pragma omp parallel for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) {
       double n_a = 0.0;  // eq. (A1): the particle itself left out
       for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
         const std::uint32_t b = nl.index[k];
@@ -87,19 +89,28 @@ struct Adaptive {
     const auto& nl = *s.neighbors;
     const std::vector<double> N = neighbour_numbers(p, nl);
     auto N_of = [&](std::uint32_t b) { return N[b < p.n_real ? b : p.ghost_source[b - p.n_real]]; };
-    for (std::size_t a = 0; a < p.n_real; ++a) {
-      if (N[a] < N_min) return (last_reason = 1), true;  // eq. (A5)
-      if (N[a] > N_max) return (last_reason = 2), true;
+    // Which condition particle a violates (0: none).
+    auto reason = [&](std::size_t a) {
+      if (N[a] < N_min) return 1;  // eq. (A5)
+      if (N[a] > N_max) return 2;
       // eq. (A4): <N>_a = sum_b m_b / rho_b N_b W_ab, the particle itself included
       double mean = p.m[a] / p.rho[a] * N[a] * kernel::W<Kernel, D>(0.0, p.h[a]);
       for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
         const std::uint32_t b = nl.index[k];
         mean += p.m[b] / p.rho[b] * N_of(b) * kernel::W<Kernel, D>((p.x[a] - p.x[b]).norm(), 0.5 * (p.h[a] + p.h[b]));
       }
-      const double dN = (N[a] - mean) / N[a];                     // eq. (A3)
-      if (std::abs(dN) > dN_max) return (last_reason = 3), true;  // eq. (A6)
-    }
-    return false;
+      const double dN = (N[a] - mean) / N[a];  // eq. (A3)
+      return std::abs(dN) > dN_max ? 3 : 0;    // eq. (A6)
+    };
+    // The first particle in index order that fires, whatever the thread count.
+    const std::size_t n = p.n_real;
+    std::size_t first = n;
+#pragma omp parallel for schedule(static) reduction(min : first)
+    for (std::size_t a = 0; a < n; ++a)
+      if (a < first && reason(a) != 0) first = a;
+    if (first == n) return false;
+    last_reason = reason(first);
+    return true;
   }
 };
 

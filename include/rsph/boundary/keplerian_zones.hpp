@@ -1,0 +1,47 @@
+#pragma once
+// Boundary zones of §5.1 (as in PARASPH): gas in the radial intervals [r_0, r_1] and [r_2, r_3] moves
+// on fixed circular orbits. Membership is decided by radius whenever the particle set is rebuilt
+// (at start and after each regularization); between, a member turns by Omega(r) dt exactly.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace rsph::boundary {
+
+struct KeplerianZones {
+  double GM = 1.0;
+  double inner_lo = 0.4, inner_hi = 0.5;  ///< the inner zone
+  double outer_lo = 2.4, outer_hi = 2.5;  ///< the outer zone
+  /// v_phi = v_factor sqrt(GM / r): 1 for Keplerian orbits, below 1 where pressure supports the gas.
+  double v_factor = 1.0;
+
+  void validate() const {
+    require(GM > 0.0, "Keplerian zones: GM must be positive");
+    require(inner_lo >= 0.0 && inner_lo <= inner_hi && inner_hi < outer_lo && outer_lo <= outer_hi,
+            "Keplerian zones: need 0 <= inner_lo <= inner_hi < outer_lo <= outer_hi");
+    require(v_factor > 0.0 && v_factor <= 1.0, "Keplerian zones: v_factor must lie in (0, 1]");
+  }
+  /// Particles outside [inner_lo, outer_hi] also move on fixed orbits: they left the disk and are the
+  /// scene's to remove.
+  bool contains(const Vec<2>& x) const {
+    const double r = x.norm();
+    return r <= inner_hi || r >= outer_lo;
+  }
+  double Omega(double r) const { return v_factor * std::sqrt(GM / (r * r * r)); }
+  /// Circular velocity at x.
+  Vec<2> velocity(const Vec<2>& x) const {
+    const double r = x.norm();
+    return Omega(r) * Vec<2>(-x[1], x[0]);
+  }
+  /// Turns x by Omega(r) dt about the origin and sets v to the circular velocity there.
+  void advance(Vec<2>& x, Vec<2>& v, double dt) const {
+    const double angle = Omega(x.norm()) * dt;
+    const double c = std::cos(angle), s = std::sin(angle);
+    x = Vec<2>(c * x[0] - s * x[1], s * x[0] + c * x[1]);
+    v = velocity(x);
+  }
+};
+
+}  // namespace rsph::boundary

@@ -1,0 +1,59 @@
+#pragma once
+// §5 of the paper (after de Val-Borro et al. 2006): a star and a planet on a fixed circular orbit about
+// their common centre of mass, the planet's mass ramped in by eq. (20), its potential Plummer-softened.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace rsph::physics {
+
+struct StarAndPlanet {
+  double M_star = 1.0;
+  double q = 1e-3;           ///< M_p / (M_* + M_p)
+  double a = 1.0;            ///< orbital radius of the planet
+  double softening = 0.03;   ///< of the planet's potential, in units of a
+  double ramp_orbits = 5.0;  ///< eq. (20): M_p sin^2(pi t / (2 ramp_orbits P_p)) until ramp_orbits P_p
+
+  void validate() const {
+    require(M_star > 0.0, "star and planet: the star's mass must be positive");
+    require(q >= 0.0 && q < 1.0,
+            "star and planet: q = M_p / (M_* + M_p) must lie in [0, 1) (got " + std::to_string(q) + ")");
+    require(a > 0.0, "star and planet: the orbital radius must be positive");
+    require(softening >= 0.0, "star and planet: the softening must be non-negative");
+    require(ramp_orbits >= 0.0, "star and planet: the ramp length must be non-negative");
+  }
+  double planet_mass() const { return q / (1.0 - q) * M_star; }
+  /// Angular velocity of the fixed orbit, set by the full planet mass throughout.
+  double Omega_p() const { return std::sqrt((M_star + planet_mass()) / (a * a * a)); }
+  double period() const { return 2.0 * std::numbers::pi / Omega_p(); }
+  /// Eq. (20): the planet mass at time t.
+  double planet_mass_at(double t) const {
+    const double ramp = ramp_orbits * period();
+    if (t >= ramp || ramp <= 0.0) return planet_mass();
+    const double s = std::sin(0.5 * std::numbers::pi * t / ramp);
+    return planet_mass() * s * s;
+  }
+  /// Azimuth of the planet at time t (it starts on the +x axis).
+  double planet_phase(double t) const { return Omega_p() * t; }
+  Vec<2> planet_position(double t) const {
+    const double r = a * (1.0 - q), phi = planet_phase(t);
+    return {r * std::cos(phi), r * std::sin(phi)};
+  }
+  Vec<2> star_position(double t) const {
+    const double r = -a * q, phi = planet_phase(t);
+    return {r * std::cos(phi), r * std::sin(phi)};
+  }
+  /// Point-mass gravity of the star plus the softened planet.
+  Vec<2> acceleration(const Vec<2>& x, double t) const {
+    const Vec<2> d_s = x - star_position(t), d_p = x - planet_position(t);
+    const double r2_s = d_s.squaredNorm();
+    const double eps = softening * a;
+    const double r2_p = d_p.squaredNorm() + eps * eps;
+    return (-M_star / (r2_s * std::sqrt(r2_s))) * d_s + (-planet_mass_at(t) / (r2_p * std::sqrt(r2_p))) * d_p;
+  }
+};
+
+}  // namespace rsph::physics
