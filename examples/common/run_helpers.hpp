@@ -3,8 +3,10 @@
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/json.hpp"
+#include "rsph/simulation.hpp"
 
 #include <array>
+#include <chrono>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -40,6 +42,44 @@ class ConservationLog {
   }
   io::CsvWriter csv_;
 };
+
+/// What a run cost, recorded the same way by every scene's run loop.
+struct RunCost {
+  double wall_seconds = 0.0, mean_particles = 0.0;
+  std::size_t particles_initial = 0, particles_final = 0;
+  std::uint64_t steps = 0, updates = 0, regularizations = 0;
+  PhaseTimes phases;
+
+  /// Fills the record at the end of a run that started at t0; particle_steps sums n over the steps.
+  template <class Sim>
+  void finish(const Sim& sim, std::chrono::steady_clock::time_point t0, double particle_steps) {
+    wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    particles_final = sim.particles().n_real;
+    steps = sim.steps();
+    updates = sim.particle_updates();
+    mean_particles = steps > 0 ? particle_steps / static_cast<double>(steps) : 0.0;
+    regularizations = sim.regularizations();
+    phases = sim.phase_times();
+  }
+};
+
+/// Removes the real particles at positions where gone(x) holds and recomputes the rates if any went;
+/// returns their mass and adds their number to `removed`.
+template <class Sim, class Gone>
+double remove_particles(Sim& sim, Gone&& gone, std::size_t& removed) {
+  auto& p = sim.particles();
+  bool any = false;
+  for (std::size_t a = 0; a < p.n_real && !any; ++a) any = gone(p.x[a]);
+  if (!any) return 0.0;
+  double mass = 0.0;
+  removed += p.erase_if([&](std::size_t a) {
+    const bool out = gone(p.x[a]);
+    if (out) mass += p.m[a];
+    return out;
+  });
+  sim.compute_rates();
+  return mass;
+}
 
 /// Relative change of a conserved quantity, guarded against a zero reference.
 inline double relative_change(double now, double start) {

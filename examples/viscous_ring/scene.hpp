@@ -148,41 +148,14 @@ inline RingSnapshot measure_ring(const ViscousRingParams& s, double tau, double 
   return snap;
 }
 
-struct RingRun {
+struct RingRun : examples::RunCost {
   std::vector<RingSnapshot> snapshots;
   double nu_eff = 0.0, nu_eff_min = 0.0, nu_eff_max = 0.0, noise_error = 0.0;
   double mass_initial = 0.0, mass_final = 0.0, mass_accreted = 0.0, max_mass_error = 0.0;
-  double wall_seconds = 0.0, mean_particles = 0.0;
-  std::size_t particles_initial = 0, particles_final = 0, particles_accreted = 0;
-  std::uint64_t steps = 0, updates = 0, regularizations = 0;
-  PhaseTimes phases;
+  std::size_t particles_accreted = 0;
 };
 
 namespace detail {
-
-/// Removes particles inside the accretion radius; returns their mass.
-template <class Sim>
-double accrete(Sim& sim, double radius, std::size_t& removed) {
-  auto& p = sim.particles();
-  const double r2 = radius * radius;
-  bool any = false;
-  for (std::size_t a = 0; a < p.n_real && !any; ++a) any = p.x[a].squaredNorm() < r2;
-  if (!any) return 0.0;
-  typename Sim::Particles kept;
-  kept.reserve(p.n_real);
-  double mass = 0.0;
-  for (std::size_t a = 0; a < p.n_real; ++a) {
-    if (p.x[a].squaredNorm() < r2) {
-      mass += p.m[a];
-      ++removed;
-      continue;
-    }
-    kept.add(p.m[a], p.x[a], p.v[a], p.h[a]);
-  }
-  p = std::move(kept);
-  sim.compute_rates();
-  return mass;
-}
 
 template <class Sim, class OnStep, class OnSnapshot>
 RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
@@ -196,7 +169,9 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
     const double t_snap = s.time_of(s.taus[k]);
     while (sim.time() < t_snap * (1.0 - 1e-14)) {
       sim.step(t_snap - sim.time());
-      r.mass_accreted += accrete(sim, s.inner_radius, r.particles_accreted);
+      r.mass_accreted += examples::remove_particles(
+          sim, [r2 = s.inner_radius * s.inner_radius](const Vec<2>& x) { return x.squaredNorm() < r2; },
+          r.particles_accreted);
       particle_steps += static_cast<double>(sim.particles().n_real);
       on_step(sim);
     }
@@ -208,14 +183,8 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
     r.snapshots.push_back(std::move(snap));
     on_snapshot(sim, static_cast<int>(k));
   }
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  r.finish(sim, t0, particle_steps);
   r.mass_final = sim.totals().mass;
-  r.particles_final = sim.particles().n_real;
-  r.steps = sim.steps();
-  r.updates = sim.particle_updates();
-  r.mean_particles = r.steps > 0 ? particle_steps / static_cast<double>(r.steps) : 0.0;
-  r.regularizations = sim.regularizations();
-  r.phases = sim.phase_times();
   double sum = 0.0, noise = 0.0;
   r.nu_eff_min = std::numeric_limits<double>::infinity();
   r.nu_eff_max = -std::numeric_limits<double>::infinity();

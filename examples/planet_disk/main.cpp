@@ -1,0 +1,182 @@
+// rsph-planet-disk: a planet in a protoplanetary disk (§5, Figs. 12-18): log Sigma maps, the cuts at
+// phi = pi and r = a, the azimuthal average, the gap depth over time and the cost of each phase.
+#include "common/cli.hpp"
+#include "common/run_helpers.hpp"
+#include "planet_disk/scene.hpp"
+#include "rsph/io/csv.hpp"
+#include "rsph/io/hdf5_snapshot.hpp"
+#include "rsph/io/json.hpp"
+#include "rsph/io/progress.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <numbers>
+
+using namespace rsph;
+namespace ex = rsph::examples;
+
+namespace {
+
+/// The final state as the paper's figures show it, written as CSV.
+template <class P>
+void write_maps(const std::filesystem::path& dir, const P& p, const scenes::PlanetDiskParams& s, double time,
+                std::size_t n_r, std::size_t n_phi) {
+  using K = kernel::CubicSpline;
+  const double phi_p = s.star_planet().planet_phase(time);
+  const analysis::PolarGrid grid{s.r_in, s.r_out, phi_p, n_r, n_phi};
+  const auto sigma = analysis::interpolate_density<K>(p, grid.points());
+  io::CsvWriter map(dir / "map.csv", {"r", "phi", "sigma_over_sigma0"});
+  for (std::size_t i = 0; i < n_r; ++i)
+    for (std::size_t j = 0; j < n_phi; ++j) map.row({grid.r(i), grid.phi(j), sigma[i * n_phi + j] / s.sigma0});
+  map.close();
+
+  // Fig. 13: opposite the planet; Fig. 14: along the orbit.
+  const std::size_t n_cut = 4 * n_r;
+  std::vector<Vec<2>> radial, azimuthal;
+  for (std::size_t i = 0; i < n_cut; ++i) {
+    const double r = s.r_in + (static_cast<double>(i) + 0.5) * (s.r_out - s.r_in) / double(n_cut);
+    radial.emplace_back(r * std::cos(phi_p + std::numbers::pi), r * std::sin(phi_p + std::numbers::pi));
+  }
+  for (std::size_t j = 0; j < 2 * n_phi; ++j) {
+    const double phi = phi_p - std::numbers::pi + (static_cast<double>(j) + 0.5) * std::numbers::pi / double(n_phi);
+    azimuthal.emplace_back(std::cos(phi), std::sin(phi));
+  }
+  const auto along_r = analysis::interpolate_density<K>(p, radial);
+  const auto along_phi = analysis::interpolate_density<K>(p, azimuthal);
+  io::CsvWriter cut_r(dir / "cut_phi_pi.csv", {"r", "sigma_over_sigma0"});
+  for (std::size_t i = 0; i < n_cut; ++i) cut_r.row({radial[i].norm(), along_r[i] / s.sigma0});
+  cut_r.close();
+  io::CsvWriter cut_phi(dir / "cut_r_a.csv", {"phi", "sigma_over_sigma0"});
+  for (std::size_t j = 0; j < 2 * n_phi; ++j)
+    cut_phi.row({-std::numbers::pi + (static_cast<double>(j) + 0.5) * std::numbers::pi / double(n_phi),
+                 along_phi[j] / s.sigma0});
+  cut_phi.close();
+
+  // Fig. 15: the azimuthal average; the wake of linear theory for the map.
+  const auto profile = scenes::disk_profile(p, s);
+  io::CsvWriter prof(dir / "profile.csv", {"r", "sigma_over_sigma0"});
+  for (std::size_t k = 0; k < profile.r.size(); ++k) prof.row({profile.r[k], profile.sigma[k]});
+  prof.close();
+  io::CsvWriter wake(dir / "wake.csv", {"r", "phi"});
+  for (std::size_t i = 0; i < n_cut; ++i) {
+    const double r = radial[i].norm();
+    const double phi = analysis::wake_azimuth(r, 1.0, s.aspect);
+    wake.row({r, std::remainder(phi, 2.0 * std::numbers::pi)});  // wrapped into [-pi, pi]
+  }
+  wake.close();
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  return ex::guarded_main("rsph-planet-disk", [&] {
+    scenes::PlanetDiskParams s;
+    ex::CommonOptions common;
+    std::string resolution = "low";
+    double snapshot_every = 10.0;
+    std::size_t map_nr = 210, map_nphi = 256;
+    ex::po::options_description desc("rsph-planet-disk options");
+    ex::add_common_options(desc, common);
+    desc.add_options()("method", ex::po::value(&s.method)->default_value(s.method),
+                       "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity")(
+        "eos", ex::po::value(&s.eos)->default_value(s.eos), "isothermal (c_s / v_K fixed) or polytropic (eq. 21)")(
+        "q", ex::po::value(&s.q)->default_value(s.q), "M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune")(
+        "resolution", ex::po::value(&resolution)->default_value(resolution),
+        "low (48 000 particles), med (108 000) or high (191 000)")(
+        "particles", ex::po::value(&s.particles), "particle count over the disk (overrides --resolution)")(
+        "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(s.h_over_dx), "RSPH: h / Delta; SPH: eta")(
+        "orbits", ex::po::value(&s.orbits)->default_value(s.orbits), "planet orbits to run")(
+        "zone-width", ex::po::value(&s.zone_width)->default_value(s.zone_width),
+        "width of the boundary zones on fixed orbits at both edges")(
+        "courant", ex::po::value(&s.courant)->default_value(s.courant), "time-step Courant factor")(
+        "force", ex::po::value(&s.force)->default_value(s.force), "time-step force factor")(
+        "alpha", ex::po::value(&s.alpha)->default_value(s.alpha), "SPH artificial viscosity alpha")(
+        "beta", ex::po::value(&s.beta)->default_value(s.beta), "SPH artificial viscosity beta")(
+        "n-min", ex::po::value(&s.N_min)->default_value(s.N_min), "Appendix A: N_min")(
+        "n-max", ex::po::value(&s.N_max)->default_value(s.N_max), "Appendix A: N_max")(
+        "dn-max", ex::po::value(&s.dN_max)->default_value(s.dN_max), "Appendix A: delta N_max")(
+        "max-steps", ex::po::value(&s.max_steps)->default_value(s.max_steps),
+        "Appendix A: most steps between regularizations")(
+        "measure-every", ex::po::value(&s.measure_every)->default_value(s.measure_every),
+        "orbits between measurements (mass, gap depth)")(
+        "snapshot-every", ex::po::value(&snapshot_every)->default_value(snapshot_every), "orbits between snapshots")(
+        "map-nr", ex::po::value(&map_nr)->default_value(map_nr), "radial cells of the Sigma map")(
+        "map-nphi", ex::po::value(&map_nphi)->default_value(map_nphi), "azimuthal cells of the Sigma map");
+    ex::po::variables_map vm;
+    if (!ex::parse(argc, argv, desc, vm,
+                   "rsph-planet-disk: planet-disk interaction of §5 (de Val-Borro et al. 2006 set-up).\n"
+                   "Usage: rsph-planet-disk [--method rsph] [--eos isothermal] [--q 1e-3] [--resolution low] "
+                   "[--out DIR]"))
+      return 0;
+    if (!vm.count("particles")) {
+      if (resolution == "low")
+        s.particles = 48000;
+      else if (resolution == "med")
+        s.particles = 108000;
+      else if (resolution == "high")
+        s.particles = 191000;
+      else
+        throw InputError("unknown resolution '" + resolution + "' (low, med, high)");
+    }
+    if (ex::quick_preset(common)) {
+      if (!vm.count("particles")) s.particles = 8000;
+      if (vm["orbits"].defaulted()) s.orbits = 10.0;
+      if (vm["snapshot-every"].defaulted()) snapshot_every = 5.0;
+    }
+    s.validate();
+    require(snapshot_every > 0.0, "--snapshot-every must be positive");
+    require(map_nr >= 2 && map_nphi >= 4, "the Sigma map needs at least 2 x 4 cells");
+    ex::apply_threads(common.threads);
+    const auto dir = ex::prepare_output(common.out);
+    const double period = s.period();
+    io::Progress progress(fmt::format("rsph-planet-disk {} {}", s.method, s.eos), s.orbits * period);
+    io::CsvWriter timeline(dir / "timeline.csv", {"orbit", "time", "mass", "mass_removed", "gap_depth", "particles",
+                                                  "steps", "regularizations", "wall_seconds"});
+    std::size_t snapshots = 0;
+    double next_snapshot = 0.0;
+    auto on_step = [&](const auto& sim) {
+      if (!common.quiet) progress.update(sim.time(), sim.steps());
+    };
+    auto on_sample = [&](const auto& sim, const scenes::DiskSample& d) {
+      timeline.row({d.orbit, d.time, d.mass, d.mass_removed, d.gap_depth, static_cast<double>(d.particles),
+                    static_cast<double>(d.steps), static_cast<double>(d.regularizations), d.wall_seconds});
+      const bool last = d.orbit >= s.orbits * (1.0 - 1e-12);
+      if (d.orbit >= next_snapshot * (1.0 - 1e-12) || last) {
+        io::write_snapshot(dir / io::snapshot_name(snapshots++), sim.particles(), sim.time(), sim.steps());
+        next_snapshot += snapshot_every;
+      }
+      if (last) write_maps(dir, sim.particles(), s, sim.time(), map_nr, map_nphi);
+    };
+    const auto r = scenes::run_planet_disk(s, on_step, on_sample);
+    progress.finish();
+    timeline.close();
+
+    io::Json phases = ex::phase_json(r.phases);
+    std::vector<io::Json> mass_over_time;
+    for (const auto& d : r.samples) {
+      io::Json j;
+      j.set("orbit", d.orbit).set("mass", d.mass).set("mass_removed", d.mass_removed).set("gap_depth", d.gap_depth);
+      mass_over_time.push_back(j);
+    }
+    io::Json summary;
+    summary.set("test", "planet_disk").set("method", s.method).set("eos", s.eos).set("q", s.q);
+    summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
+    summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
+    summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);
+    summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final).set("mass_removed", r.mass_removed);
+    summary.set("mass_error", r.max_mass_error).set("gap_depth", r.samples.back().gap_depth);
+    summary.set("wall_seconds", r.wall_seconds).set("cpu_seconds", ex::cpu_seconds()).set("steps", r.steps);
+    summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
+    summary.set("regularizations", r.regularizations).set("regularization_seconds", r.phases.regularization);
+    summary.set("phase_seconds", phases).set("timeline", mass_over_time);
+    summary.write(dir / "summary.json");
+    fmt::print(
+        "rsph-planet-disk {} {} q = {}: {} particles, {} steps, {} regularizations, {:.1f} s ({:.2f} M updates/s); "
+        "gap depth {:.3f}, mass removed {:.2e} of {:.3e}, mass error {:.1e}\n",
+        s.method, s.eos, s.q, r.particles_initial, r.steps, r.regularizations, r.wall_seconds,
+        static_cast<double>(r.updates) / r.wall_seconds * 1e-6, r.samples.back().gap_depth, r.mass_removed,
+        r.mass_initial, r.max_mass_error);
+    return 0;
+  });
+}

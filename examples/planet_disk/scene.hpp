@@ -1,0 +1,244 @@
+#pragma once
+// §5 of the paper after de Val-Borro et al. (2006): a Jupiter (q = 1e-3) or Neptune (1e-4) on a fixed
+// circular orbit at a = 1 in a disk of uniform Sigma_0 (eq. 19) between r = 0.4 and 2.5, locally
+// isothermal with c_s / v_K = 0.05 or polytropic (eq. 21). Gas in [0.4, 0.5] and [2.4, 2.5] moves on
+// fixed circular orbits. RSPH without artificial viscosity (h/Delta = 1.4, Appendix A's adaptive
+// regularization) or equal-mass grad-h SPH with artificial viscosity, on the same initial lattice.
+#include "common/run_helpers.hpp"
+#include "rsph/analysis/disk.hpp"
+#include "rsph/boundary/keplerian_zones.hpp"
+#include "rsph/physics/star_planet.hpp"
+#include "rsph/rsph.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <numbers>
+#include <string>
+#include <vector>
+
+namespace rsph::scenes {
+
+struct PlanetDiskParams {
+  double q = 1e-3;                 ///< M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune
+  std::string eos = "isothermal";  ///< isothermal (§5.2, §5.4) or polytropic (§5.3)
+  std::string method = "rsph";     ///< rsph: regularized, no artificial viscosity; sph: grad-h SPH
+  double particles = 48000;        ///< target particle count over the disk (LOW 48 000, MED 108 000, HIGH 191 000)
+  double h_over_dx = 1.4;          ///< RSPH: h / Delta; SPH: eta of h = eta (m / rho)^(1/2)
+  double orbits = 100.0;           ///< planet orbits to run
+  double r_in = 0.4, r_out = 2.5;  ///< the disk
+  double zone_width = 0.1;         ///< width of the boundary zones on fixed orbits
+  double sigma0 = 0.0002 / std::numbers::pi;        ///< eq. (19), M_* / (pi a^2) units
+  double aspect = 0.05;                             ///< c_s / v_K
+  double gamma = 1.4;                               ///< polytropic exponent (eq. 21)
+  double softening = 0.03;                          ///< planet potential, in units of a
+  double ramp_orbits = 5.0;                         ///< eq. (20)
+  double N_min = 4.5, N_max = 107.0, dN_max = 0.8;  ///< Appendix A, the paper's §5 values
+  int max_steps = 160;
+  double alpha = 1.0, beta = 2.0;      ///< SPH artificial viscosity
+  double measure_every = 1.0;          ///< orbits between measurements (mass, gap depth)
+  double bin_width = 0.02;             ///< annuli of the azimuthal average
+  double courant = 0.3, force = 0.25;  ///< time-step factors
+
+  void validate() const {
+    require(q >= 0.0 && q < 0.1, "planet disk: q must lie in [0, 0.1) (got " + std::to_string(q) + ")");
+    require(eos == "isothermal" || eos == "polytropic",
+            "planet disk: unknown equation of state '" + eos + "' (isothermal, polytropic)");
+    require(method == "rsph" || method == "sph", "planet disk: unknown method '" + method + "' (rsph, sph)");
+    require(particles >= 100.0, "planet disk: need at least 100 particles (got " + std::to_string(particles) + ")");
+    require(h_over_dx > 0.0, "planet disk: h/dx must be positive (got " + std::to_string(h_over_dx) + ")");
+    require(orbits > 0.0, "planet disk: the number of orbits must be positive");
+    require(r_in > 0.0 && r_out > r_in + 2.0 * zone_width && zone_width > 0.0,
+            "planet disk: need 0 < r_in and r_in + 2 zone_width < r_out (an empty disk otherwise)");
+    require(r_in < 1.0 && r_out > 1.0, "planet disk: the planet's orbit (r = 1) must lie inside the disk");
+    require(sigma0 > 0.0 && aspect > 0.0 && aspect < 0.5, "planet disk: need Sigma_0 > 0 and 0 < c_s/v_K < 0.5");
+    require(gamma > 1.0, "planet disk: gamma must exceed 1");
+    require(N_min > 0.0 && N_max > N_min && dN_max > 0.0 && max_steps >= 1,
+            "planet disk: need 0 < N_min < N_max, dN_max > 0 and max_steps >= 1");
+    require(measure_every > 0.0 && bin_width > 0.0, "planet disk: measurement interval and bin width must be positive");
+    require(courant > 0.0 && courant <= 1.0 && force > 0.0, "planet disk: bad time-step factors");
+  }
+  bool rsph() const { return method == "rsph"; }
+  double area() const { return std::numbers::pi * (r_out * r_out - r_in * r_in); }
+  double spacing() const { return std::sqrt(area() / particles); }
+  double h() const { return h_over_dx * spacing(); }
+  physics::StarAndPlanet star_planet() const { return {1.0, q, 1.0, softening, ramp_orbits}; }
+  double period() const { return star_planet().period(); }
+  /// Pressure support: v_phi^2 = v_K^2 (1 - aspect^2 / Gamma) for Sigma uniform and P ~ Sigma / r, with
+  /// Gamma = 1 for the isothermal and gamma for the polytropic disk (whose P starts at c_s^2 Sigma / gamma).
+  double v_factor() const { return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0)); }
+  boundary::KeplerianZones zones() const {
+    return {1.0, r_in, r_in + zone_width, r_out - zone_width, r_out, v_factor()};
+  }
+  Box<2> box() const {
+    Box<2> b;
+    b.lo = Vec<2>(-r_out - 1.0, -r_out - 1.0);
+    b.hi = Vec<2>(r_out + 1.0, r_out + 1.0);
+    b.edge = {Edge::open, Edge::open};
+    return b;
+  }
+};
+
+/// c_s(x) = aspect v_K(|x|) about the centre of mass.
+struct DiskSoundSpeed {
+  double aspect = 0.05, GM = 1.0;
+  double operator()(const Vec<2>& x) const { return aspect * std::sqrt(GM / x.norm()); }
+};
+
+/// Eq. (21): K(r) = c_s,0(r)^2 / (gamma Sigma_0^(gamma - 1)).
+struct DiskPolytropicK {
+  DiskSoundSpeed cs;
+  double gamma = 1.4, sigma0 = 1.0;
+  double operator()(const Vec<2>& x) const {
+    const double c = cs(x);
+    return c * c / (gamma * std::pow(sigma0, gamma - 1.0));
+  }
+};
+
+/// Square-lattice sites in r_in <= r <= r_out on circular orbits. RSPH masses carry the kernel's lattice
+/// sum, so rho = Sigma_0 in the bulk at h = (h/Delta) Delta; SPH particles have equal masses Sigma_0 Delta^2.
+inline ParticleSet<2, false> disk_particles(const PlanetDiskParams& s) {
+  s.validate();
+  const double dx = s.spacing();
+  const double bias = s.rsph() ? kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx) : 1.0;
+  const lattice::Square lat{dx};
+  const Box<2> box = s.box();
+  const auto range = lat.cells_touching(box, Vec<2>(-s.r_out, -s.r_out), Vec<2>(s.r_out, s.r_out));
+  const auto zones = s.zones();
+  ParticleSet<2, false> p;
+  for (std::int64_t j = range.lo[1]; j <= range.hi[1]; ++j)
+    for (std::int64_t i = range.lo[0]; i <= range.hi[0]; ++i) {
+      const Vec<2> x = lat.site(box, {i, j});
+      const double r = x.norm();
+      if (r < s.r_in || r > s.r_out) continue;
+      p.add(s.sigma0 * dx * dx / bias, x, zones.velocity(x), s.h());
+    }
+  require(p.n_real > 0, "planet disk: the annulus holds no lattice site");
+  return p;
+}
+
+/// One measurement of the disk.
+struct DiskSample {
+  double orbit = 0.0, time = 0.0, mass = 0.0, mass_removed = 0.0, gap_depth = 0.0, wall_seconds = 0.0;
+  std::size_t particles = 0;
+  std::uint64_t steps = 0, regularizations = 0;
+};
+
+/// The azimuthally averaged Sigma / Sigma_0 (the SPH sum on a polar grid, rings bin_width apart, 256
+/// azimuths) and its minimum near the orbit, 0.8 <= r <= 1.2: the gap depth.
+struct DiskProfile {
+  std::vector<double> r, sigma;
+  double gap_depth = 0.0;
+};
+
+template <class P>
+DiskProfile disk_profile(const P& p, const PlanetDiskParams& s) {
+  const auto n_r = static_cast<std::size_t>(std::ceil((s.r_out - s.r_in) / s.bin_width - 1e-9));
+  const analysis::PolarGrid grid{s.r_in, s.r_out, 0.0, n_r, 256};
+  const auto mean =
+      analysis::azimuthal_average(grid, analysis::interpolate_density<kernel::CubicSpline>(p, grid.points()));
+  DiskProfile out;
+  out.gap_depth = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < n_r; ++i) {
+    out.r.push_back(grid.r(i));
+    out.sigma.push_back(mean[i] / s.sigma0);
+    if (grid.r(i) >= 0.8 && grid.r(i) <= 1.2) out.gap_depth = std::min(out.gap_depth, mean[i] / s.sigma0);
+  }
+  return out;
+}
+
+struct DiskRun : examples::RunCost {
+  std::vector<DiskSample> samples;
+  double mass_initial = 0.0, mass_final = 0.0, mass_removed = 0.0, max_mass_error = 0.0;
+  std::size_t particles_removed = 0;
+};
+
+namespace detail {
+
+template <class Sim, class OnStep, class OnSample>
+DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample) {
+  DiskRun r;
+  const auto t0 = std::chrono::steady_clock::now();
+  r.mass_initial = sim.totals().mass;
+  r.particles_initial = sim.particles().n_real;
+  const double period = s.period(), t_end = s.orbits * period;
+  // Gas that leaves the disk by more than a lattice spacing is gone: removed and counted.
+  const double r_lo = s.r_in - s.spacing(), r_hi = s.r_out + s.spacing();
+  double particle_steps = 0.0;
+  auto sample = [&] {
+    DiskSample d;
+    d.time = sim.time();
+    d.orbit = sim.time() / period;
+    d.mass = sim.totals().mass;
+    d.mass_removed = r.mass_removed;
+    d.gap_depth = disk_profile(sim.particles(), s).gap_depth;
+    d.particles = sim.particles().n_real;
+    d.steps = sim.steps();
+    d.regularizations = sim.regularizations();
+    d.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.max_mass_error = std::max(r.max_mass_error, std::abs(d.mass + r.mass_removed - r.mass_initial) / r.mass_initial);
+    r.samples.push_back(d);
+    on_sample(sim, r.samples.back());
+  };
+  sample();
+  for (int k = 1; sim.time() < t_end * (1.0 - 1e-14); ++k) {
+    const double t_next = std::min(t_end, k * s.measure_every * period);
+    while (sim.time() < t_next * (1.0 - 1e-14)) {
+      sim.step(t_next - sim.time());
+      r.mass_removed += examples::remove_particles(
+          sim, [&](const Vec<2>& x) { return x.squaredNorm() < r_lo * r_lo || x.squaredNorm() > r_hi * r_hi; },
+          r.particles_removed);
+      particle_steps += static_cast<double>(sim.particles().n_real);
+      on_step(sim);
+    }
+    sample();
+  }
+  r.finish(sim, t0, particle_steps);
+  r.mass_final = sim.totals().mass;
+  return r;
+}
+
+template <class EOS, class Run>
+auto with_method(const PlanetDiskParams& s, EOS eos, Run&& run) {
+  using K = kernel::CubicSpline;
+  TimeStepParams ts;
+  ts.courant = s.courant;
+  ts.force = s.force;
+  const auto gravity = s.star_planet();
+  const auto zones = s.zones();
+  if (s.rsph()) {
+    using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<K, 2>, geometry::LocalVoronoi,
+                                               region::Annulus>;
+    // Edge cells are closed at 0.75 Delta along the edge and by the disk's circles across it, and a new
+    // cell less than half covered hands its share on: the edges stay where the disk ends.
+    const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
+    Reg reg(lattice::Square{s.spacing()},
+            schedule::Adaptive<K, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)}, remap, {},
+            region::Annulus{s.r_in, s.r_out});
+    Simulation<2, K, EOS, Reg, physics::StarAndPlanet, boundary::KeplerianZones> sim(
+        disk_particles(s), s.box(), std::move(eos), std::move(reg), ts, gravity, zones);
+    return run(sim);
+  } else {
+    Simulation<2, K, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity, physics::StarAndPlanet,
+               boundary::KeplerianZones>
+        sim(disk_particles(s), s.box(), std::move(eos), {}, ts, physics::GradH<2>{s.h_over_dx},
+            physics::ArtificialViscosity{s.alpha, s.beta}, gravity, zones);
+    return run(sim);
+  }
+}
+
+}  // namespace detail
+
+/// Runs the disk; on_step(sim) after each step, on_sample(sim, sample) at the start and every
+/// measure_every orbits (the last at the end of the run).
+template <class OnStep, class OnSample>
+DiskRun run_planet_disk(const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample) {
+  s.validate();
+  const DiskSoundSpeed cs{s.aspect, 1.0};
+  auto run = [&](auto& sim) { return detail::run_disk(sim, s, on_step, on_sample); };
+  if (s.eos == "polytropic")
+    return detail::with_method(s, eos::Polytropic<DiskPolytropicK>(s.gamma, DiskPolytropicK{cs, s.gamma, s.sigma0}),
+                               run);
+  return detail::with_method(s, eos::LocallyIsothermal<DiskSoundSpeed>(cs), run);
+}
+
+}  // namespace rsph::scenes
