@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <limits>
 #include <vector>
 #ifdef _OPENMP
 #include <omp.h>
@@ -51,6 +52,10 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
   std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> extra(T);  // (a, b) found from b's side
   const std::size_t n_all = x.size();
   auto chunk = [](std::size_t n, std::size_t t, std::size_t parts) { return n * t / parts; };
+  // A point whose radius no query point falls short of has nothing to scatter: with one h for all
+  // (an RSPH lattice) the scatter pass costs one comparison per point.
+  double own_min = std::numeric_limits<double>::infinity();
+  for (std::size_t a = 0; a < n_query; ++a) own_min = std::min(own_min, reach_of(h[a], h[a]));
 
 #pragma omp parallel num_threads(n_threads)
   {
@@ -84,6 +89,7 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
       const Vec<D> xb = x[b];
       const double hb = h[b];
       const double own_b = reach_of(hb, hb);
+      if (own_b <= own_min) continue;
       cells.for_each_within(xb, own_b, [&](std::uint32_t a) {
         if (a >= n_query || a == b) return;
         const double own_a = reach_of(h[a], h[a]);
