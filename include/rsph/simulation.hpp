@@ -61,6 +61,8 @@ class Simulation {
   static constexpr bool has_zones = (BoundaryZone<Terms, D> || ...);
   using Particles = ParticleSet<D, has_energy>;
   using KernelType = Kernel;
+  /// The density pass also sums n_a of eq. (A1) when the regularizer's schedule uses it (fixed h only).
+  static constexpr bool wants_number_density = !grad_h && requires { requires Reg::wants_number_density; };
 
   Simulation(Particles particles, Box<D> box, EOS eos, Reg reg, TimeStepParams params, Terms... terms)
       : p_(std::move(particles)),
@@ -82,6 +84,8 @@ class Simulation {
   const Reg& regularizer() const { return reg_; }
   Reg& regularizer() { return reg_; }
   const neighbors::NeighborList& neighbor_list() const { return nl_; }
+  /// n_a of eq. (A1) from the last density pass (only when the regularizer wants it).
+  const std::vector<double>& number_density() const requires wants_number_density { return number_density_; }
   double time() const { return time_; }
   std::uint64_t steps() const { return step_; }
   std::uint64_t particle_updates() const { return particle_updates_; }
@@ -139,6 +143,7 @@ class Simulation {
     info_.step = step_;
     info_.time = time_;
     info_.neighbors = &nl_;
+    if constexpr (wants_number_density) info_.number_density = &number_density_;
     t0 = clock::now();
     const bool due = reg_.due(p_, box_, info_);  // an adaptive schedule's check is regularization cost too
     times_.regularization += seconds_since(t0);
@@ -239,15 +244,20 @@ class Simulation {
     const auto& x = p_.x;
     const auto& h = p_.h;
     const auto& m = p_.m;
+    if constexpr (wants_number_density) number_density_.resize(n);
 #pragma omp parallel for schedule(static)
     for (std::size_t a = 0; a < n; ++a) {
       double rho = m[a] * kernel::W<Kernel, D>(0.0, h[a]);
+      double n_a = 0.0;
       for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
         const std::uint32_t b = nl_.index[k];
         const double r = (x[a] - x[b]).norm();
-        rho += physics::density_term(m[b], kernel::W<Kernel, D>(r, 0.5 * (h[a] + h[b])));
+        const double W_ab = kernel::W<Kernel, D>(r, 0.5 * (h[a] + h[b]));
+        rho += physics::density_term(m[b], W_ab);
+        if constexpr (wants_number_density) n_a += W_ab;  // eq. (A1), for the regularization schedule
       }
       p_.rho[a] = rho;
+      if constexpr (wants_number_density) number_density_[a] = n_a;
     }
     update_pressure();
   }
@@ -541,8 +551,9 @@ class Simulation {
   neighbors::NeighborList nl_;
   std::vector<double> v_sig_;
   std::vector<double> h_scratch_;
-  std::vector<double> Omega_;        ///< grad-h factors (real and ghosts), only with a smoothing-length solver
-  std::vector<Mat<D>> S_over_rho2_;  ///< viscous stress / rho^2 (real and ghosts), only with a stress term
+  std::vector<double> number_density_;  ///< n_a of eq. (A1), only when the regularizer wants it
+  std::vector<double> Omega_;           ///< grad-h factors (real and ghosts), only with a smoothing-length solver
+  std::vector<Mat<D>> S_over_rho2_;     ///< viscous stress / rho^2 (real and ghosts), only with a stress term
   std::vector<Vec<D>> v_half_;
   typename Particles::EnergyField u_half_;
   double time_ = 0.0;

@@ -30,7 +30,11 @@ bool adaptive_fires(double scale, schedule::Adaptive<Kernel, 2> adaptive) {
            TimeStepParams{});
   StepInfo info;
   info.neighbors = &sim.neighbor_list();
-  return sim.regularizer().schedule().due(sim.particles(), box, info);
+  auto& schedule = sim.regularizer().schedule();
+  const bool fires = schedule.due(sim.particles(), box, info);
+  info.number_density = &sim.number_density();  // the driver's eq. (A1) sums decide the same
+  REQUIRE(schedule.due(sim.particles(), box, info) == fires);
+  return fires;
 }
 
 }  // namespace
@@ -54,6 +58,28 @@ TEST_CASE("the adaptive schedule fires on compressed and expanded lattices and i
   schedule::Adaptive<Kernel, 2> paper{9.5, 308.0, 0.4, 128};
   CHECK_FALSE(adaptive_fires(1.0, paper));
   CHECK(adaptive_fires(0.2, paper));  // h/Delta = 6
+}
+
+TEST_CASE("the density pass sums eq. (A1) exactly as the schedule's own pass does", "[schedule]") {
+  Box<2> box;
+  box.edge = {Edge::periodic, Edge::periodic};
+  auto p = scaled_lattice(24, 1.0);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    p.x[a] += Vec<2>(0.011 * std::sin(37.0 * a), 0.013 * std::cos(53.0 * a));  // off the lattice
+    p.x[a] -= p.x[a].array().floor().matrix();
+    if (p.x[a][1] < 0.5) p.h[a] *= 1.3;  // two smoothing lengths
+  }
+  RSPH sim(p, box, eos::IdealGas{1.4},
+           regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<Kernel, 2>>(
+               lattice::Square{1.0 / 24}, schedule::Adaptive<Kernel, 2>{}),
+           TimeStepParams{});
+  const auto& schedule = sim.regularizer().schedule();
+  const auto N = schedule.neighbour_numbers(sim.particles(), sim.neighbor_list());
+  const auto& n = sim.number_density();
+  double worst = 0.0;
+  for (std::size_t a = 0; a < N.size(); ++a)
+    worst = std::max(worst, std::abs(schedule.interaction_volume(sim.particles().h[a]) * n[a] - N[a]) / N[a]);
+  CHECK(worst < 1e-13);
 }
 
 TEST_CASE("the adaptive schedule fires on a local jump in neighbour number (eq. A6)", "[schedule]") {

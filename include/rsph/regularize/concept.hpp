@@ -6,6 +6,7 @@
 
 #include <concepts>
 #include <cstdint>
+#include <vector>
 
 namespace rsph {
 
@@ -16,6 +17,9 @@ struct StepInfo {
   std::uint64_t steps_since_last = 0;  ///< steps since the last regularization (or the start)
   double time_since_last = 0.0;
   const neighbors::NeighborList* neighbors = nullptr;  ///< current neighbour lists of the real particles
+  /// n_a = sum_{b != a} W_ab (eq. A1 of the paper) from the density pass, when the regularizer asks for it
+  /// (`static constexpr bool wants_number_density`) and h is fixed; null otherwise.
+  const std::vector<double>* number_density = nullptr;
 };
 
 /// A regularizer decides when (`due`) and remaps the particles onto a new set (`remap`) conserving

@@ -25,6 +25,9 @@ struct Record {
 template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi, class Region = region::Unbounded>
 class LatticeRegularizer {
  public:
+  /// The driver hands the schedule n_a of eq. (A1) from its density pass (StepInfo::number_density).
+  static constexpr bool wants_number_density = requires { requires Schedule::wants_number_density; };
+
   explicit LatticeRegularizer(Lattice lattice, Schedule schedule, RemapParams params = {}, Builder builder = {},
                               Region region = {})
       : lattice_(std::move(lattice)),

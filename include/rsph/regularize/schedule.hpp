@@ -39,6 +39,7 @@ struct EveryT {
 /// or its local spread delta N_a (eqs. A3-A4) exceeds delta N_max, or after max_steps steps.
 template <class Kernel, int D>
 struct Adaptive {
+  static constexpr bool wants_number_density = true;
   double N_min = 9.5;
   double N_max = 308.0;
   double dN_max = 0.4;
@@ -87,7 +88,14 @@ struct Adaptive {
     if (s.steps_since_last >= max_steps) return (last_reason = 4), true;
     if (!s.neighbors) return false;
     const auto& nl = *s.neighbors;
-    const std::vector<double> N = neighbour_numbers(p, nl);
+    std::vector<double> N;
+    if (s.number_density) {  // eq. (A1) summed by the driver's density pass
+      N.resize(p.n_real);
+      const auto& n_a = *s.number_density;
+      for (std::size_t a = 0; a < p.n_real; ++a) N[a] = interaction_volume(p.h[a]) * n_a[a];
+    } else {
+      N = neighbour_numbers(p, nl);
+    }
     auto N_of = [&](std::uint32_t b) { return N[b < p.n_real ? b : p.ghost_source[b - p.n_real]]; };
     // Which condition particle a violates (0: none).
     auto reason = [&](std::size_t a) {
