@@ -169,6 +169,7 @@ int main(int argc, char** argv) {
     summary.set("wall_seconds", r.wall_seconds).set("cpu_seconds", ex::cpu_seconds()).set("steps", r.steps);
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
     summary.set("regularizations", r.regularizations).set("regularization_seconds", r.phases.regularization);
+    summary.set("remap_seconds", r.remap_seconds);
     summary.set("phase_seconds", phases).set("timeline", mass_over_time);
     summary.write(dir / "summary.json");
     fmt::print(
