@@ -100,6 +100,7 @@ class Simulation {
   /// One kick-drift-kick leapfrog step of at most dt_limit; regularizes afterwards when due.
   /// Returns the step taken.
   double step(double dt_limit = std::numeric_limits<double>::infinity()) {
+    if (params_.max_bin > 0) return block_step(dt_limit);
     double dt = std::min(time_step(), dt_limit);
     if constexpr (requires { reg_.time_until_due(info_); }) {
       const double left = reg_.time_until_due(info_);  // land on a time-based regularization exactly
@@ -140,16 +141,109 @@ class Simulation {
     ++info_.steps_since_last;
     info_.time_since_last += dt;
     particle_updates_ += n;
+    finish_step();
+    return dt;
+  }
+
+  /// After a step (or a block of them): the regularizer's turn, then the physical check.
+  void finish_step() {
     info_.step = step_;
     info_.time = time_;
     info_.neighbors = &nl_;
     if constexpr (wants_number_density) info_.number_density = &number_density_;
-    t0 = clock::now();
+    const auto t0 = clock::now();
     const bool due = reg_.due(p_, box_, info_);  // an adaptive schedule's check is regularization cost too
     times_.regularization += seconds_since(t0);
     if (due) regularize_now();
     if (params_.check_every_step) check_physical();
-    return dt;
+  }
+
+  /// One block of individual time steps (TimeStepParams::max_bin > 0) of at most dt_limit: every
+  /// particle steps in the power-of-two bin its own Courant and force conditions allow, kick-drift-kick
+  /// with its own step; all drift on the finest step. A particle is evaluated (neighbours, density,
+  /// forces) only when its step ends; between, its density is predicted by the continuity equation.
+  /// At the end of the block all are synchronised, evaluated afresh, and the regularizer may act.
+  /// Returns the block's length.
+  double block_step(double dt_limit) {
+    const std::size_t n = p_.n_real;
+    auto t0 = clock::now();
+    double dt_lo = std::numeric_limits<double>::infinity(), dt_hi = 0.0;
+    dt_own_.assign(n, std::numeric_limits<double>::infinity());
+    for (std::size_t a = 0; a < n; ++a) {
+      if (p_.frozen[a]) continue;
+      dt_own_[a] = particle_time_step(p_, v_sig_, params_, a);
+      dt_lo = std::min(dt_lo, dt_own_[a]);
+      if (std::isfinite(dt_own_[a])) dt_hi = std::max(dt_hi, dt_own_[a]);
+    }
+    if (!std::isfinite(dt_lo))
+      throw InputError("no time-step constraint: nothing moves or exerts force; set TimeStepParams::dt_max");
+    int K = 0;
+    while (K < params_.max_bin && dt_lo * double(std::uint64_t{2} << K) <= dt_hi) ++K;
+    double block = dt_lo * double(std::uint64_t{1} << K);
+    double limit = dt_limit;
+    if constexpr (requires { reg_.time_until_due(info_); }) {
+      const double left = reg_.time_until_due(info_);  // land on a time-based regularization exactly
+      if (left > 0.0) limit = std::min(limit, left);
+    }
+    if (block > limit) {  // a shorter block, still with its finest step within every particle's limit
+      block = limit;
+      K = 0;
+      while (K < params_.max_bin && block / double(std::uint64_t{1} << K) > dt_lo) ++K;
+    }
+    const std::uint64_t n_sub = std::uint64_t{1} << K;
+    const double delta = block / double(n_sub);
+    if (!(delta > params_.dt_min))
+      throw NumericalError("time step " + std::to_string(delta) + " fell below the minimum " +
+                           std::to_string(params_.dt_min) + " at t = " + std::to_string(time_));
+    // Each particle's bin: the longest step 2^-k of the block within its own limit.
+    stride_.assign(n, n_sub);
+    for (std::size_t a = 0; a < n; ++a)
+      while (stride_[a] > 1 && delta * double(stride_[a]) > dt_own_[a]) stride_[a] >>= 1;
+    v_half_.resize(n);
+    if constexpr (has_energy) u_half_.resize(n);
+    step_start_.assign(n, 0);
+    times_.integrate += seconds_since(t0);
+    for (std::uint64_t sub = 0; sub < n_sub; ++sub) {
+      t0 = clock::now();
+      const bool sync = sub + 1 == n_sub;
+      active_.clear();
+      for (std::size_t a = 0; a < n; ++a) {
+        if (p_.frozen[a]) continue;
+        const double dt_a = delta * double(stride_[a]);
+        if (sub % stride_[a] == 0) {  // its step begins: first half kick
+          step_start_[a] = sub;
+          v_half_[a] = p_.v[a] + 0.5 * dt_a * p_.dv_dt[a];
+          if constexpr (has_energy) u_half_[a] = p_.u[a] + 0.5 * dt_a * p_.du_dt[a];
+        }
+        p_.x[a] += delta * v_half_[a];
+        keep_inside(a);
+        // predicted velocity (and energy) at the end of this substep, for the pair terms
+        const double lead = double(sub + 1 - step_start_[a]) * delta - 0.5 * dt_a;
+        p_.v[a] = v_half_[a] + lead * p_.dv_dt[a];
+        if constexpr (has_energy) p_.u[a] = std::max(0.0, u_half_[a] + lead * p_.du_dt[a]);
+        if ((sub + 1) % stride_[a] == 0) active_.push_back(static_cast<std::uint32_t>(a));
+      }
+      time_ += delta;
+      prescribe_frozen(delta);
+      times_.integrate += seconds_since(t0);
+      if (sync)
+        compute_rates();
+      else
+        compute_rates_of_active();
+      t0 = clock::now();
+      for (const std::uint32_t a : active_) {  // its step ends: second half kick
+        const double dt_a = delta * double(stride_[a]);
+        p_.v[a] = v_half_[a] + 0.5 * dt_a * p_.dv_dt[a];
+        if constexpr (has_energy) p_.u[a] = u_half_[a] + 0.5 * dt_a * p_.du_dt[a];
+      }
+      times_.integrate += seconds_since(t0);
+      particle_updates_ += sync ? n : active_.size();
+      ++step_;
+      ++info_.steps_since_last;
+      info_.time_since_last += delta;
+    }
+    finish_step();
+    return block;
   }
 
   /// Regularizes now, whatever the schedule says.
@@ -203,6 +297,10 @@ class Simulation {
     auto t0 = clock::now();
     if constexpr (has_stress) compute_stress();
     compute_forces();
+    if (params_.max_bin > 0) {
+      rho_eval_.assign(p_.rho.begin(), p_.rho.begin() + static_cast<std::ptrdiff_t>(p_.n_real));
+      t_eval_.assign(p_.n_real, time_);
+    }
     times_.forces += seconds_since(t0);
   }
 
@@ -240,16 +338,33 @@ class Simulation {
 
   /// The density sum alone (eq. 2) with P and c_s, over current neighbour lists; for benchmarks.
   void compute_density() {
-    const std::size_t n = p_.n_real;
+    density_rows(neighbors::FirstN{p_.n_real});
+    update_pressure();
+  }
+
+  /// Accelerations and heating rates over current neighbour lists and densities; for benchmarks.
+  void compute_forces() {
+    if (params_.max_bin > 0)
+      force_rows<true>(neighbors::FirstN{p_.n_real});
+    else
+      force_rows<false>(neighbors::FirstN{p_.n_real});
+  }
+
+ private:
+  /// The density sum (eq. 2) for the points of `rows` (row i of the neighbour lists is point rows[i]).
+  template <class Rows>
+  void density_rows(const Rows& rows) {
     const auto& x = p_.x;
     const auto& h = p_.h;
     const auto& m = p_.m;
-    if constexpr (wants_number_density) number_density_.resize(n);
+    if constexpr (wants_number_density) number_density_.resize(p_.n_real);
+    const std::size_t n_rows = rows.size();
 #pragma omp parallel for schedule(static)
-    for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t i = 0; i < n_rows; ++i) {
+      const std::uint32_t a = rows[i];
       double rho = m[a] * kernel::W<Kernel, D>(0.0, h[a]);
       double n_a = 0.0;
-      for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+      for (auto k = nl_.offset[i]; k < nl_.offset[i + 1]; ++k) {
         const std::uint32_t b = nl_.index[k];
         const double r = (x[a] - x[b]).norm();
         const double W_ab = kernel::W<Kernel, D>(r, 0.5 * (h[a] + h[b]));
@@ -259,16 +374,21 @@ class Simulation {
       p_.rho[a] = rho;
       if constexpr (wants_number_density) number_density_[a] = n_a;
     }
-    update_pressure();
   }
 
-  /// Accelerations and heating rates over current neighbour lists and densities; for benchmarks.
-  void compute_forces() {
+  /// Accelerations and heating rates of the points of `rows`; with_drho also sums the continuity
+  /// equation's d rho / dt, which predicts the density of particles between their steps.
+  template <bool with_drho, class Rows>
+  void force_rows(const Rows& rows) {
     const std::size_t n = p_.n_real;
     v_sig_.resize(n);
+    if constexpr (with_drho) drho_dt_.resize(n);
+    const std::size_t n_rows = rows.size();
 #pragma omp parallel for schedule(static)
-    for (std::size_t a = 0; a < n; ++a) {
+    for (std::size_t i = 0; i < n_rows; ++i) {
+      const std::uint32_t a = rows[i];
       Vec<D> dv = Vec<D>::Zero();
+      double drho = 0.0;
       double du = 0.0;
       double v_sig = p_.cs[a];
       physics::Pair<D> pr;
@@ -279,7 +399,7 @@ class Simulation {
       pr.u_a = energy_of(a);
       const double h_a = p_.h[a];
       if constexpr (grad_h) pr.Omega_a = Omega_[a];
-      for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+      for (auto k = nl_.offset[i]; k < nl_.offset[i + 1]; ++k) {
         const std::uint32_t b = nl_.index[k];
         pr.r_ab = p_.x[a] - p_.x[b];
         pr.r = pr.r_ab.norm();
@@ -303,6 +423,7 @@ class Simulation {
           if constexpr (has_energy) du += physics::pressure_heating_grad_h(pr);
         } else {
           pr.grad_W = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, pr.h_ab);
+          if constexpr (with_drho) drho += physics::continuity_term(pr.m_b, pr.v_ab, pr.grad_W);
           dv += physics::pressure_acceleration(pr);
           if constexpr (has_energy) du += physics::pressure_heating(pr);
         }
@@ -316,11 +437,11 @@ class Simulation {
       std::apply([&](const auto&... term) { (add_body_force(term, p_.x[a], dv), ...); }, terms_);
       p_.dv_dt[a] = dv;
       if constexpr (has_energy) p_.du_dt[a] = du;
+      if constexpr (with_drho) drho_dt_[a] = drho;
       v_sig_[a] = v_sig;
     }
   }
 
- private:
   using clock = std::chrono::steady_clock;
   static double seconds_since(clock::time_point t0) { return std::chrono::duration<double>(clock::now() - t0).count(); }
 
@@ -364,6 +485,38 @@ class Simulation {
       return 0.5 * (kernel::grad_W<Kernel, D>(r_ab, r, h_a) + kernel::grad_W<Kernel, D>(r_ab, r, h_b));
     else
       return kernel::grad_W<Kernel, D>(r_ab, r, 0.5 * (h_a + h_b));
+  }
+
+  /// Rates of the particles whose step ends now (active_): their neighbours, density and forces; every
+  /// other particle's density is predicted from its last evaluation by the continuity equation.
+  void compute_rates_of_active() {
+    auto t0 = clock::now();
+    const std::size_t n = p_.n_real;
+    double h_max = 0.0;
+    for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
+    boundary::make_ghosts(p_, box_, Kernel::support * h_max);
+    h_scratch_.assign(p_.h.begin(), p_.h.begin() + static_cast<std::ptrdiff_t>(n));
+    std::nth_element(h_scratch_.begin(), h_scratch_.begin() + static_cast<std::ptrdiff_t>(n / 2), h_scratch_.end());
+    cells_.build(p_.x, Kernel::support * h_scratch_[n / 2]);
+    row_.assign(p_.size(), -1);
+    for (std::size_t i = 0; i < active_.size(); ++i) row_[active_[i]] = static_cast<std::int32_t>(i);
+    const neighbors::Subset rows{&active_, &row_};
+    neighbors::build_neighbor_list<D>(p_.x, p_.h, rows, neighbors::MeanH{Kernel::support}, cells_, nl_);
+    times_.neighbors += seconds_since(t0);
+    t0 = clock::now();
+#pragma omp parallel for schedule(static)
+    for (std::size_t a = 0; a < n; ++a)
+      if (row_[a] < 0) p_.rho[a] = std::max(rho_eval_[a] + (time_ - t_eval_[a]) * drho_dt_[a], 0.01 * rho_eval_[a]);
+    density_rows(rows);
+    update_pressure();
+    times_.density += seconds_since(t0);
+    t0 = clock::now();
+    force_rows<true>(rows);
+    for (const std::uint32_t a : active_) {
+      rho_eval_[a] = p_.rho[a];
+      t_eval_[a] = time_;
+    }
+    times_.forces += seconds_since(t0);
   }
 
   void build_neighbors(double margin) {
@@ -511,6 +664,8 @@ class Simulation {
     for (int k = 0; k < D; ++k)
       require(box_.hi[k] > box_.lo[k], "the box is empty along axis " + std::to_string(k) + " (hi <= lo)");
     params_.validate();
+    require(params_.max_bin == 0 || (!grad_h && !has_stress),
+            "individual time steps (max_bin > 0) need fixed smoothing lengths and no viscous stress term");
     validate_policy(eos_);
     validate_policy(reg_);
     std::apply([&](const auto&... term) { (validate_policy(term), ...); }, terms_);
@@ -551,6 +706,12 @@ class Simulation {
   neighbors::NeighborList nl_;
   std::vector<double> v_sig_;
   std::vector<double> h_scratch_;
+  // individual time steps: per-particle limits, strides (in finest substeps), step starts, the active
+  // set and its rows, and the last evaluated density with its time and rate
+  std::vector<double> dt_own_, rho_eval_, t_eval_, drho_dt_;
+  std::vector<std::uint64_t> stride_, step_start_;
+  std::vector<std::uint32_t> active_;
+  std::vector<std::int32_t> row_;
   std::vector<double> number_density_;  ///< n_a of eq. (A1), only when the regularizer wants it
   std::vector<double> Omega_;           ///< grad-h factors (real and ghosts), only with a smoothing-length solver
   std::vector<Mat<D>> S_over_rho2_;     ///< viscous stress / rho^2 (real and ghosts), only with a stress term

@@ -84,3 +84,36 @@ TEST_CASE("smoothing lengths spread over a factor 10: pairs seen only from the l
 TEST_CASE("reflecting walls add mirror images and keep real pairs", "[neighbors]") {
   compare_with_brute_force<2>(9, {Edge::reflecting, Edge::periodic}, neighbors::MeanH{2.0}, 2.0);
 }
+
+TEST_CASE("neighbour lists of a subset of the points equal their rows in the full list", "[neighbors]") {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::vector<Vec<2>> x;
+  std::vector<double> h;
+  for (int i = 0; i < 2000; ++i) {
+    x.emplace_back(u(rng), u(rng));
+    h.push_back(0.02 + 0.03 * u(rng));  // a spread of h: the scatter pass matters
+  }
+  neighbors::CellList<2> cells;
+  cells.build(x, 0.08);
+  neighbors::NeighborList full, part;
+  neighbors::build_neighbor_list<2>(x, h, x.size(), neighbors::MeanH{2.0}, cells, full);
+  std::vector<std::uint32_t> subset;
+  std::vector<std::int32_t> row(x.size(), -1);
+  for (std::uint32_t a = 0; a < x.size(); a += 7) {
+    row[a] = static_cast<std::int32_t>(subset.size());
+    subset.push_back(a);
+  }
+  neighbors::build_neighbor_list<2>(x, h, neighbors::Subset{&subset, &row}, neighbors::MeanH{2.0}, cells, part);
+  REQUIRE(part.offset.size() == subset.size() + 1);
+  for (std::size_t i = 0; i < subset.size(); ++i) {
+    const std::uint32_t a = subset[i];
+    std::vector<std::uint32_t> want(full.index.begin() + static_cast<std::ptrdiff_t>(full.offset[a]),
+                                    full.index.begin() + static_cast<std::ptrdiff_t>(full.offset[a + 1]));
+    std::vector<std::uint32_t> got(part.index.begin() + static_cast<std::ptrdiff_t>(part.offset[i]),
+                                   part.index.begin() + static_cast<std::ptrdiff_t>(part.offset[i + 1]));
+    std::sort(want.begin(), want.end());
+    std::sort(got.begin(), got.end());
+    REQUIRE(got == want);
+  }
+}

@@ -35,27 +35,47 @@ struct MaxH {
   double operator()(double ha, double hb) const { return support * margin * std::max(ha, hb); }
 };
 
-/// Neighbours of the first n_query points among all of x (ghosts included): every b != a with
-/// |x_a - x_b| < reach(h_a, h_b). Works for any spread of h: each point a gathers within its own radius
-/// reach(h_a, h_a); a point b with a larger radius scatters itself onto the a's that could not see it.
-/// `cells` must be built over all of x; its cell size may be smaller than the largest radius.
-template <int D, class Reach>
-void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>& h, std::size_t n_query,
-                         Reach reach_of, const CellList<D>& cells, NeighborList& out) {
-  out.offset.assign(n_query + 1, 0);
+/// Rows of a neighbour list: the first n points, in order (every real particle).
+struct FirstN {
+  std::size_t n = 0;
+  std::size_t size() const { return n; }
+  std::uint32_t operator[](std::size_t i) const { return static_cast<std::uint32_t>(i); }
+  std::int64_t row_of(std::size_t a) const { return a < n ? static_cast<std::int64_t>(a) : -1; }
+};
+
+/// Rows of a neighbour list: a subset of the points (the active ones of individual time steps);
+/// `row[a]` is a's row or -1, sized for all points.
+struct Subset {
+  const std::vector<std::uint32_t>* index = nullptr;
+  const std::vector<std::int32_t>* row = nullptr;
+  std::size_t size() const { return index->size(); }
+  std::uint32_t operator[](std::size_t i) const { return (*index)[i]; }
+  std::int64_t row_of(std::size_t a) const { return a < row->size() ? (*row)[a] : -1; }
+};
+
+/// Neighbours of the query points `rows` among all of x (ghosts included): every b != a with
+/// |x_a - x_b| < reach(h_a, h_b), row i of `out` holding those of point rows[i]. Works for any spread of
+/// h: each point a gathers within its own radius reach(h_a, h_a); a point b with a larger radius scatters
+/// itself onto the a's that could not see it. `cells` must be built over all of x; its cell size may be
+/// smaller than the largest radius.
+template <int D, class Rows, class Reach>
+void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>& h, const Rows& rows, Reach reach_of,
+                         const CellList<D>& cells, NeighborList& out) {
+  const std::size_t n_rows = rows.size();
+  out.offset.assign(n_rows + 1, 0);
   int n_threads = 1;
 #ifdef _OPENMP
   n_threads = omp_get_max_threads();
 #endif
   const std::size_t T = static_cast<std::size_t>(n_threads);
   std::vector<std::vector<std::uint32_t>> local(T);
-  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> extra(T);  // (a, b) found from b's side
+  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> extra(T);  // (row of a, b) from b's side
   const std::size_t n_all = x.size();
   auto chunk = [](std::size_t n, std::size_t t, std::size_t parts) { return n * t / parts; };
   // A point whose radius no query point falls short of has nothing to scatter: with one h for all
   // (an RSPH lattice) the scatter pass costs one comparison per point.
   double own_min = std::numeric_limits<double>::infinity();
-  for (std::size_t a = 0; a < n_query; ++a) own_min = std::min(own_min, reach_of(h[a], h[a]));
+  for (std::size_t i = 0; i < n_rows; ++i) own_min = std::min(own_min, reach_of(h[rows[i]], h[rows[i]]));
 
 #pragma omp parallel num_threads(n_threads)
   {
@@ -68,7 +88,8 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
     buf.clear();
     ext.clear();
     // gather: a sees the b within its own radius
-    for (std::size_t a = chunk(n_query, t, T); a < chunk(n_query, t + 1, T); ++a) {
+    for (std::size_t i = chunk(n_rows, t, T); i < chunk(n_rows, t + 1, T); ++i) {
+      const std::uint32_t a = rows[i];
       const Vec<D> xa = x[a];
       const double ha = h[a];
       const double own = reach_of(ha, ha);
@@ -82,7 +103,7 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
           ++n;
         }
       });
-      out.offset[a + 1] = n;
+      out.offset[i + 1] = n;
     }
     // scatter: b with a larger radius finds the query points a that did not reach it
     for (std::size_t b = chunk(n_all, t, T); b < chunk(n_all, t + 1, T); ++b) {
@@ -91,20 +112,22 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
       const double own_b = reach_of(hb, hb);
       if (own_b <= own_min) continue;
       cells.for_each_within(xb, own_b, [&](std::uint32_t a) {
-        if (a >= n_query || a == b) return;
+        const std::int64_t row = rows.row_of(a);
+        if (row < 0 || a == b) return;
         const double own_a = reach_of(h[a], h[a]);
         if (own_a >= own_b) return;  // a's own gather covers this pair
         const double reach = reach_of(h[a], hb);
         const double r2 = (x[a] - xb).squaredNorm();
-        if (r2 < reach * reach && r2 >= own_a * own_a) ext.emplace_back(a, static_cast<std::uint32_t>(b));
+        if (r2 < reach * reach && r2 >= own_a * own_a)
+          ext.emplace_back(static_cast<std::uint32_t>(row), static_cast<std::uint32_t>(b));
       });
     }
   }
   std::size_t n_extra = 0;
   for (const auto& e : extra) n_extra += e.size();
   if (n_extra == 0) {
-    for (std::size_t a = 0; a < n_query; ++a) out.offset[a + 1] += out.offset[a];
-    out.index.resize(out.offset[n_query]);
+    for (std::size_t i = 0; i < n_rows; ++i) out.offset[i + 1] += out.offset[i];
+    out.index.resize(out.offset[n_rows]);
     std::size_t pos = 0;
     for (const auto& buf : local) {
       std::copy(buf.begin(), buf.end(), out.index.begin() + static_cast<std::ptrdiff_t>(pos));
@@ -112,29 +135,36 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
     }
     return;
   }
-  // Merge the scattered pairs: counts first, then each a's gathered list followed by its extras.
-  std::vector<std::uint64_t> gathered(n_query);
-  for (std::size_t a = 0; a < n_query; ++a) gathered[a] = out.offset[a + 1];
-  std::vector<std::uint64_t> gathered_start(n_query + 1, 0);
-  for (std::size_t a = 0; a < n_query; ++a) gathered_start[a + 1] = gathered_start[a] + gathered[a];
-  std::vector<std::uint64_t> extra_count(n_query, 0);
+  // Merge the scattered pairs: counts first, then each row's gathered list followed by its extras.
+  std::vector<std::uint64_t> gathered(n_rows);
+  for (std::size_t i = 0; i < n_rows; ++i) gathered[i] = out.offset[i + 1];
+  std::vector<std::uint64_t> gathered_start(n_rows + 1, 0);
+  for (std::size_t i = 0; i < n_rows; ++i) gathered_start[i + 1] = gathered_start[i] + gathered[i];
+  std::vector<std::uint64_t> extra_count(n_rows, 0);
   for (const auto& e : extra)
     for (const auto& pr : e) ++extra_count[pr.first];
   out.offset[0] = 0;
-  for (std::size_t a = 0; a < n_query; ++a) out.offset[a + 1] = out.offset[a] + gathered[a] + extra_count[a];
-  out.index.resize(out.offset[n_query]);
+  for (std::size_t i = 0; i < n_rows; ++i) out.offset[i + 1] = out.offset[i] + gathered[i] + extra_count[i];
+  out.index.resize(out.offset[n_rows]);
   std::vector<std::uint32_t> all_gathered;
-  all_gathered.reserve(gathered_start[n_query]);
+  all_gathered.reserve(gathered_start[n_rows]);
   for (const auto& buf : local) all_gathered.insert(all_gathered.end(), buf.begin(), buf.end());
-  std::vector<std::uint64_t> fill(n_query);
-  for (std::size_t a = 0; a < n_query; ++a) {
-    std::copy(all_gathered.begin() + static_cast<std::ptrdiff_t>(gathered_start[a]),
-              all_gathered.begin() + static_cast<std::ptrdiff_t>(gathered_start[a + 1]),
-              out.index.begin() + static_cast<std::ptrdiff_t>(out.offset[a]));
-    fill[a] = out.offset[a] + gathered[a];
+  std::vector<std::uint64_t> fill(n_rows);
+  for (std::size_t i = 0; i < n_rows; ++i) {
+    std::copy(all_gathered.begin() + static_cast<std::ptrdiff_t>(gathered_start[i]),
+              all_gathered.begin() + static_cast<std::ptrdiff_t>(gathered_start[i + 1]),
+              out.index.begin() + static_cast<std::ptrdiff_t>(out.offset[i]));
+    fill[i] = out.offset[i] + gathered[i];
   }
   for (const auto& e : extra)
     for (const auto& pr : e) out.index[fill[pr.first]++] = pr.second;
+}
+
+/// Neighbours of the first n_query points (row a holds point a's).
+template <int D, class Reach>
+void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>& h, std::size_t n_query,
+                         Reach reach_of, const CellList<D>& cells, NeighborList& out) {
+  build_neighbor_list<D>(x, h, FirstN{n_query}, reach_of, cells, out);
 }
 
 /// O(N^2) oracle: every b with |separation(x_a, x_b)| < reach(h_a, h_b), using minimum images when

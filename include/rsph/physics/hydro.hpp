@@ -7,6 +7,13 @@ namespace rsph::physics {
 /// eq. (2) of the paper: the contribution m_b W_ab to rho_a.
 inline double density_term(double m_b, double W_ab) { return m_b * W_ab; }
 
+/// The continuity equation, d rho_a / dt += m_b v_ab . nabla_a W_ab (Monaghan 1992): the rate of
+/// eq. (2)'s sum, which predicts the density of a particle between its individual time steps.
+template <int D>
+inline double continuity_term(double m_b, const Vec<D>& v_ab, const Vec<D>& grad_W) {
+  return m_b * v_ab.dot(grad_W);
+}
+
 /// eq. (3) of the paper without Pi_ab: dv_a/dt += -m_b (P_b / rho_b^2 + P_a / rho_a^2) nabla_a W_ab.
 template <int D>
 inline Vec<D> pressure_acceleration(const Pair<D>& p) {
