@@ -91,6 +91,9 @@ int main(int argc, char** argv) {
         "width of the boundary zones on fixed orbits at both edges")(
         "courant", ex::po::value(&s.courant)->default_value(s.courant), "time-step Courant factor")(
         "force", ex::po::value(&s.force)->default_value(s.force), "time-step force factor")(
+        "max-bin", ex::po::value(&s.max_bin)->default_value(s.max_bin),
+        "RSPH: individual time steps in power-of-two bins, the shortest 2^-max-bin of the longest (0: one "
+        "global step; SPH always steps globally)")(
         "alpha", ex::po::value(&s.alpha)->default_value(s.alpha), "SPH artificial viscosity alpha")(
         "beta", ex::po::value(&s.beta)->default_value(s.beta), "SPH artificial viscosity beta")(
         "n-min", ex::po::value(&s.N_min)->default_value(s.N_min), "Appendix A: N_min")(
@@ -161,6 +164,7 @@ int main(int argc, char** argv) {
     }
     io::Json summary;
     summary.set("test", "planet_disk").set("method", s.method).set("eos", s.eos).set("q", s.q);
+    summary.set("max_bin", s.rsph() ? s.max_bin : 0);
     summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
     summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
     summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);

@@ -38,6 +38,9 @@ struct PlanetDiskParams {
   double measure_every = 1.0;          ///< orbits between measurements (mass, gap depth)
   double bin_width = 0.02;             ///< annuli of the azimuthal average
   double courant = 0.3, force = 0.25;  ///< time-step factors
+  /// RSPH: individual time steps in bins down to 2^-max_bin of the longest (0: one global step); the
+  /// force condition at the inner edge sets the shortest, r = 2.4 could step 5 times longer. SPH: global.
+  int max_bin = 3;
 
   void validate() const {
     require(q >= 0.0 && q < 0.1, "planet disk: q must lie in [0, 0.1) (got " + std::to_string(q) + ")");
@@ -56,6 +59,7 @@ struct PlanetDiskParams {
             "planet disk: need 0 < N_min < N_max, dN_max > 0 and max_steps >= 1");
     require(measure_every > 0.0 && bin_width > 0.0, "planet disk: measurement interval and bin width must be positive");
     require(courant > 0.0 && courant <= 1.0 && force > 0.0, "planet disk: bad time-step factors");
+    require(max_bin >= 0 && max_bin <= 12, "planet disk: max_bin must lie in [0, 12]");
   }
   bool rsph() const { return method == "rsph"; }
   double area() const { return std::numbers::pi * (r_out * r_out - r_in * r_in); }
@@ -209,6 +213,7 @@ auto with_method(const PlanetDiskParams& s, EOS eos, Run&& run) {
   const auto gravity = s.star_planet();
   const auto zones = s.zones();
   if (s.rsph()) {
+    ts.max_bin = s.max_bin;
     using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<K, 2>, geometry::LocalVoronoi,
                                                region::Annulus>;
     // Edge cells are closed at 0.75 Delta along the edge and by the disk's circles across it, and a new

@@ -143,6 +143,8 @@ int main(int argc, char** argv) {
         "rsph: relative density jump between level-0 cells that refines a block")(
         "coarsen-below", ex::po::value(&opt.rsph.coarsen_below)->default_value(0.03),
         "rsph: jump below which a block returns to level 0")(
+        "max-bin", ex::po::value(&opt.rsph.max_bin)->default_value(0),
+        "rsph: individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: global)")(
         "h-ramp", ex::po::value(&opt.rsph.h_ramp)->default_value(2.0),
         "rsph: coarser spacings over which h rises towards a coarser block (0: h jumps)");
     ex::po::variables_map vm;

@@ -88,6 +88,7 @@ struct RsphSodParams {
   double refine_above = 0.1;    ///< relative density jump between level-0 cells that refines a block
   double coarsen_below = 0.03;  ///< ... and the jump below which it returns to level 0
   double h_ramp = 2.0;          ///< coarser spacings over which h rises towards a coarser block
+  int max_bin = 0;              ///< individual time steps down to 2^-max_bin of the longest (0: global)
   void validate() const {
     require(levels >= 0 && levels <= 8, "Sod RSPH: --levels must lie in [0, 8]");
     require(block_cells >= 1, "Sod RSPH: --block-cells must be at least 1");
@@ -148,6 +149,7 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel> make_rsph_sod(const SodP
   regularize::remap_onto_lattice(p, box, ml, builder, remap);
   TimeStepParams ts;
   ts.courant = s.courant;
+  ts.max_bin = r.max_bin;
   return RsphSodSimulation<D, Kernel>(
       std::move(p), box, gas, RsphSodRegularizer<D, Kernel>(std::move(ml), schedule::EveryNSteps{r.cycle}, remap), ts,
       physics::ArtificialViscosity{s.alpha, s.beta});
