@@ -93,8 +93,8 @@ int main(int argc, char** argv) {
         "force", ex::po::value(&s.force)->default_value(s.force), "time-step force factor")(
         "max-bin", ex::po::value(&s.max_bin)->default_value(s.max_bin),
         "RSPH: individual time steps in power-of-two bins, the shortest 2^-max-bin of the longest (0: one "
-        "global step; SPH always steps globally)")(
-        "alpha", ex::po::value(&s.alpha)->default_value(s.alpha), "SPH artificial viscosity alpha")(
+        "global step; SPH always steps globally)")("alpha", ex::po::value(&s.alpha)->default_value(s.alpha),
+                                                   "SPH artificial viscosity alpha")(
         "beta", ex::po::value(&s.beta)->default_value(s.beta), "SPH artificial viscosity beta")(
         "n-min", ex::po::value(&s.N_min)->default_value(s.N_min), "Appendix A: N_min")(
         "n-max", ex::po::value(&s.N_max)->default_value(s.N_max), "Appendix A: N_max")(

@@ -188,11 +188,12 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
   for (int k = 1; sim.time() < t_end * (1.0 - 1e-14); ++k) {
     const double t_next = std::min(t_end, k * s.measure_every * period);
     while (sim.time() < t_next * (1.0 - 1e-14)) {
+      const std::uint64_t steps_before = sim.steps();  // a block of individual steps counts each
       sim.step(t_next - sim.time());
       r.mass_removed += examples::remove_particles(
           sim, [&](const Vec<2>& x) { return x.squaredNorm() < r_lo * r_lo || x.squaredNorm() > r_hi * r_hi; },
           r.particles_removed);
-      particle_steps += static_cast<double>(sim.particles().n_real);
+      particle_steps += static_cast<double>(sim.particles().n_real) * static_cast<double>(sim.steps() - steps_before);
       on_step(sim);
     }
     sample();

@@ -35,7 +35,9 @@ int main(int argc, char** argv) {
         "initial annulus: where Sigma exceeds this fraction of its peak")(
         "inner-radius", ex::po::value(&s.inner_radius)->default_value(0.1), "accretion radius (R_0)")(
         "bin-width", ex::po::value(&s.bin_width)->default_value(0.01), "radial bin width (R_0)")(
-        "force", ex::po::value(&s.force)->default_value(0.25), "time-step force factor");
+        "force", ex::po::value(&s.force)->default_value(0.25), "time-step force factor")(
+        "max-bin", ex::po::value(&s.max_bin)->default_value(0),
+        "individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: one global step)");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-viscous-ring: the viscously spreading ring of §4 and its effective viscosity.\n"
@@ -104,6 +106,7 @@ int main(int argc, char** argv) {
     io::Json summary;
     summary.set("test", "viscous_ring").set("viscosity", s.viscosity).set("nu_s", s.nu).set("h", s.h);
     summary.set("h_over_dx", s.h_over_dx).set("cycle", s.cycle).set("cycle_unit", s.cycle_unit);
+    summary.set("max_bin", s.max_bin);
     summary.set("nu_eff", r.nu_eff).set("nu_eff_over_nu_s", r.nu_eff / s.nu);
     summary.set("nu_eff_min", r.nu_eff_min).set("nu_eff_max", r.nu_eff_max).set("noise_error", r.noise_error);
     summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final);

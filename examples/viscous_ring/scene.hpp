@@ -29,6 +29,7 @@ struct ViscousRingParams {
   std::string viscosity = "mg";  ///< mg: Monaghan-Gingold with Meglicki's alpha; ns: Navier-Stokes stress
   double bin_width = 0.01;       ///< radial bins of the azimuthal average (R_0)
   double force = 0.25;           ///< time-step force factor
+  int max_bin = 0;               ///< mg: individual time steps in 2^max_bin bins (0: one global step)
   double M = 1.0;                ///< ring mass
 
   void validate() const {
@@ -42,6 +43,9 @@ struct ViscousRingParams {
     require(viscosity == "mg" || viscosity == "ns", "viscous ring: unknown viscosity '" + viscosity + "' (mg, ns)");
     require(bin_width > 0.0, "viscous ring: the radial bin width must be positive");
     require(inner_radius >= 0.0, "viscous ring: the accretion radius must be non-negative");
+    require(max_bin >= 0 && max_bin <= 12, "viscous ring: max_bin must lie in [0, 12]");
+    require(max_bin == 0 || viscosity == "mg",
+            "viscous ring: individual time steps need a pair viscosity (mg), not the stress tensor (ns)");
   }
   double spacing() const { return h / h_over_dx; }
   analysis::ViscousRing ring() const { return {M, 1.0, 1.0, nu}; }
@@ -168,11 +172,12 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
   for (std::size_t k = 0; k < s.taus.size(); ++k) {
     const double t_snap = s.time_of(s.taus[k]);
     while (sim.time() < t_snap * (1.0 - 1e-14)) {
+      const std::uint64_t steps_before = sim.steps();  // a block of individual steps counts each
       sim.step(t_snap - sim.time());
       r.mass_accreted += examples::remove_particles(
           sim, [r2 = s.inner_radius * s.inner_radius](const Vec<2>& x) { return x.squaredNorm() < r2; },
           r.particles_accreted);
-      particle_steps += static_cast<double>(sim.particles().n_real);
+      particle_steps += static_cast<double>(sim.particles().n_real) * static_cast<double>(sim.steps() - steps_before);
       on_step(sim);
     }
     const double mass = sim.totals().mass;
@@ -228,6 +233,7 @@ RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapsho
     return run(Simulation<2, K, eos::Pressureless, regularize::None, NS, physics::PointMass<2>>(
         ring_particles(s), s.box(), {}, {}, ts, NS{s.nu}, star));
   }
+  ts.max_bin = s.max_bin;
   const MG mg = MG::on_square_lattice(s.nu, s.h_over_dx);
   if (s.cycle > 0)
     return run(Simulation<2, K, eos::Pressureless, Reg, MG, physics::PointMass<2>>(ring_particles(s), s.box(), {}, reg,
