@@ -492,12 +492,7 @@ class Simulation {
   void compute_rates_of_active() {
     auto t0 = clock::now();
     const std::size_t n = p_.n_real;
-    double h_max = 0.0;
-    for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
-    boundary::make_ghosts(p_, box_, Kernel::support * h_max);
-    h_scratch_.assign(p_.h.begin(), p_.h.begin() + static_cast<std::ptrdiff_t>(n));
-    std::nth_element(h_scratch_.begin(), h_scratch_.begin() + static_cast<std::ptrdiff_t>(n / 2), h_scratch_.end());
-    cells_.build(p_.x, Kernel::support * h_scratch_[n / 2]);
+    build_cells(1.0);
     row_.assign(p_.size(), -1);
     for (std::size_t i = 0; i < active_.size(); ++i) row_[active_[i]] = static_cast<std::int32_t>(i);
     const neighbors::Subset rows{&active_, &row_};
@@ -519,21 +514,26 @@ class Simulation {
     times_.forces += seconds_since(t0);
   }
 
-  void build_neighbors(double margin) {
-    const auto t0 = clock::now();
+  /// Ghosts out to the widest reach (times the search margin) and the cell list over all points.
+  void build_cells(double margin) {
     const std::size_t n = p_.n_real;
     double h_max = 0.0;
     for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
-    const double reach = Kernel::support * h_max * margin;
-    boundary::make_ghosts(p_, box_, reach);
+    boundary::make_ghosts(p_, box_, Kernel::support * h_max * margin);
     // Cells sized by the median h: particles with larger h search more cells (neighbor_list.hpp).
     h_scratch_.assign(p_.h.begin(), p_.h.begin() + static_cast<std::ptrdiff_t>(n));
     std::nth_element(h_scratch_.begin(), h_scratch_.begin() + static_cast<std::ptrdiff_t>(n / 2), h_scratch_.end());
     cells_.build(p_.x, Kernel::support * h_scratch_[n / 2] * margin);
+  }
+
+  void build_neighbors(double margin) {
+    const auto t0 = clock::now();
+    build_cells(margin);
+    const neighbors::FirstN rows{p_.n_real};
     if constexpr (grad_h)
-      neighbors::build_neighbor_list<D>(p_.x, p_.h, n, neighbors::MaxH{Kernel::support, margin}, cells_, nl_);
+      neighbors::build_neighbor_list<D>(p_.x, p_.h, rows, neighbors::MaxH{Kernel::support, margin}, cells_, nl_);
     else
-      neighbors::build_neighbor_list<D>(p_.x, p_.h, n, neighbors::MeanH{Kernel::support}, cells_, nl_);
+      neighbors::build_neighbor_list<D>(p_.x, p_.h, rows, neighbors::MeanH{Kernel::support}, cells_, nl_);
     times_.neighbors += seconds_since(t0);
   }
 
