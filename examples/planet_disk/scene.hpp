@@ -70,9 +70,7 @@ struct PlanetDiskParams {
   /// Pressure support: v_phi^2 = v_K^2 (1 - aspect^2 / Gamma) for Sigma uniform and P ~ Sigma / r, with
   /// Gamma = 1 for the isothermal and gamma for the polytropic disk (whose P starts at c_s^2 Sigma / gamma).
   double v_factor() const { return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0)); }
-  boundary::KeplerianZones zones() const {
-    return {1.0, r_in, r_in + zone_width, r_out - zone_width, r_out, v_factor()};
-  }
+  boundary::KeplerianZones zones() const { return {1.0, r_in + zone_width, r_out - zone_width, v_factor()}; }
   Box<2> box() const {
     Box<2> b;
     b.lo = Vec<2>(-r_out - 1.0, -r_out - 1.0);

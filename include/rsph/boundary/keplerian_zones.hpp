@@ -1,7 +1,8 @@
 #pragma once
-// Boundary zones of §5.1 (as in PARASPH): gas in the radial intervals [r_0, r_1] and [r_2, r_3] moves
-// on fixed circular orbits. Membership is decided by radius whenever the particle set is rebuilt
-// (at start and after each regularization); between, a member turns by Omega(r) dt exactly.
+// Boundary zones of §5.1 (as in PARASPH): gas inside r = inner and outside r = outer (the disk's edge
+// rings [0.4, 0.5] and [2.4, 2.5] of §5) moves on fixed circular orbits. Membership is decided by radius
+// whenever the particle set is rebuilt (at start and after each regularization); between, a member turns
+// by Omega(r) dt exactly.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 
@@ -12,22 +13,20 @@ namespace rsph::boundary {
 
 struct KeplerianZones {
   double GM = 1.0;
-  double inner_lo = 0.4, inner_hi = 0.5;  ///< the inner zone
-  double outer_lo = 2.4, outer_hi = 2.5;  ///< the outer zone
+  double inner = 0.5;  ///< gas at r <= inner is in the inner zone
+  double outer = 2.4;  ///< gas at r >= outer is in the outer zone
   /// v_phi = v_factor sqrt(GM / r): 1 for Keplerian orbits, below 1 where pressure supports the gas.
   double v_factor = 1.0;
 
   void validate() const {
     require(GM > 0.0, "Keplerian zones: GM must be positive");
-    require(inner_lo >= 0.0 && inner_lo <= inner_hi && inner_hi < outer_lo && outer_lo <= outer_hi,
-            "Keplerian zones: need 0 <= inner_lo <= inner_hi < outer_lo <= outer_hi");
+    require(inner >= 0.0 && inner < outer, "Keplerian zones: need 0 <= inner < outer");
     require(v_factor > 0.0 && v_factor <= 1.0, "Keplerian zones: v_factor must lie in (0, 1]");
   }
-  /// Particles outside [inner_lo, outer_hi] also move on fixed orbits: they left the disk and are the
-  /// scene's to remove.
+  /// Gas beyond the disk's edges is a member too: it left the disk and is the scene's to remove.
   bool contains(const Vec<2>& x) const {
     const double r = x.norm();
-    return r <= inner_hi || r >= outer_lo;
+    return r <= inner || r >= outer;
   }
   double Omega(double r) const { return v_factor * std::sqrt(GM / (r * r * r)); }
   /// Circular velocity at x.
