@@ -43,24 +43,39 @@ class ConservationLog {
   io::CsvWriter csv_;
 };
 
-/// What a run cost, recorded the same way by every scene's run loop.
+/// What a run cost, recorded the same way by every scene's run loop: begin(), count_steps() after each
+/// call of step(), finish().
 struct RunCost {
   double wall_seconds = 0.0, mean_particles = 0.0;
   std::size_t particles_initial = 0, particles_final = 0;
   std::uint64_t steps = 0, updates = 0, regularizations = 0;
   PhaseTimes phases;
 
-  /// Fills the record at the end of a run that started at t0; particle_steps sums n over the steps.
   template <class Sim>
-  void finish(const Sim& sim, std::chrono::steady_clock::time_point t0, double particle_steps) {
-    wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  void begin(const Sim& sim) {
+    started_ = std::chrono::steady_clock::now();
+    particles_initial = sim.particles().n_real;
+  }
+  double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count(); }
+  /// After a call of step() that began at steps_before: a block of individual steps counts each.
+  template <class Sim>
+  void count_steps(const Sim& sim, std::uint64_t steps_before) {
+    particle_steps_ += static_cast<double>(sim.particles().n_real) * static_cast<double>(sim.steps() - steps_before);
+  }
+  template <class Sim>
+  void finish(const Sim& sim) {
+    wall_seconds = elapsed();
     particles_final = sim.particles().n_real;
     steps = sim.steps();
     updates = sim.particle_updates();
-    mean_particles = steps > 0 ? particle_steps / static_cast<double>(steps) : 0.0;
+    mean_particles = steps > 0 ? particle_steps_ / static_cast<double>(steps) : 0.0;
     regularizations = sim.regularizations();
     phases = sim.phase_times();
   }
+
+ private:
+  std::chrono::steady_clock::time_point started_;
+  double particle_steps_ = 0.0;
 };
 
 /// Removes the real particles at positions where gone(x) holds and recomputes the rates if any went;

@@ -10,7 +10,6 @@
 #include "rsph/physics/star_planet.hpp"
 #include "rsph/rsph.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -160,13 +159,11 @@ namespace detail {
 template <class Sim, class OnStep, class OnSample>
 DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample) {
   DiskRun r;
-  const auto t0 = std::chrono::steady_clock::now();
   r.mass_initial = sim.totals().mass;
-  r.particles_initial = sim.particles().n_real;
+  r.begin(sim);
   const double period = s.period(), t_end = s.orbits * period;
   // Gas that leaves the disk by more than a lattice spacing is gone: removed and counted.
   const double r_lo = s.r_in - s.spacing(), r_hi = s.r_out + s.spacing();
-  double particle_steps = 0.0;
   auto sample = [&] {
     DiskSample d;
     d.time = sim.time();
@@ -177,7 +174,7 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
     d.particles = sim.particles().n_real;
     d.steps = sim.steps();
     d.regularizations = sim.regularizations();
-    d.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    d.wall_seconds = r.elapsed();
     r.max_mass_error = std::max(r.max_mass_error, std::abs(d.mass + r.mass_removed - r.mass_initial) / r.mass_initial);
     r.samples.push_back(d);
     on_sample(sim, r.samples.back());
@@ -186,17 +183,17 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
   for (int k = 1; sim.time() < t_end * (1.0 - 1e-14); ++k) {
     const double t_next = std::min(t_end, k * s.measure_every * period);
     while (sim.time() < t_next * (1.0 - 1e-14)) {
-      const std::uint64_t steps_before = sim.steps();  // a block of individual steps counts each
+      const std::uint64_t steps_before = sim.steps();
       sim.step(t_next - sim.time());
       r.mass_removed += examples::remove_particles(
           sim, [&](const Vec<2>& x) { return x.squaredNorm() < r_lo * r_lo || x.squaredNorm() > r_hi * r_hi; },
           r.particles_removed);
-      particle_steps += static_cast<double>(sim.particles().n_real) * static_cast<double>(sim.steps() - steps_before);
+      r.count_steps(sim, steps_before);
       on_step(sim);
     }
     sample();
   }
-  r.finish(sim, t0, particle_steps);
+  r.finish(sim);
   r.mass_final = sim.totals().mass;
   if constexpr (requires { sim.regularizer().log(); })
     for (const auto& record : sim.regularizer().log()) r.remap_seconds += record.seconds;

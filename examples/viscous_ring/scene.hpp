@@ -8,7 +8,6 @@
 #include "rsph/rsph.hpp"
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <limits>
 #include <string>
@@ -164,20 +163,18 @@ namespace detail {
 template <class Sim, class OnStep, class OnSnapshot>
 RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
   RingRun r;
-  const auto t0 = std::chrono::steady_clock::now();
   r.mass_initial = sim.totals().mass;
-  r.particles_initial = sim.particles().n_real;
-  double particle_steps = 0.0;
+  r.begin(sim);
   on_snapshot(sim, -1);
   for (std::size_t k = 0; k < s.taus.size(); ++k) {
     const double t_snap = s.time_of(s.taus[k]);
     while (sim.time() < t_snap * (1.0 - 1e-14)) {
-      const std::uint64_t steps_before = sim.steps();  // a block of individual steps counts each
+      const std::uint64_t steps_before = sim.steps();
       sim.step(t_snap - sim.time());
       r.mass_accreted += examples::remove_particles(
           sim, [r2 = s.inner_radius * s.inner_radius](const Vec<2>& x) { return x.squaredNorm() < r2; },
           r.particles_accreted);
-      particle_steps += static_cast<double>(sim.particles().n_real) * static_cast<double>(sim.steps() - steps_before);
+      r.count_steps(sim, steps_before);
       on_step(sim);
     }
     const double mass = sim.totals().mass;
@@ -188,7 +185,7 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
     r.snapshots.push_back(std::move(snap));
     on_snapshot(sim, static_cast<int>(k));
   }
-  r.finish(sim, t0, particle_steps);
+  r.finish(sim);
   r.mass_final = sim.totals().mass;
   double sum = 0.0, noise = 0.0;
   r.nu_eff_min = std::numeric_limits<double>::infinity();
