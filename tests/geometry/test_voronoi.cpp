@@ -28,14 +28,15 @@ std::vector<Point> jittered(int n, double jitter, unsigned seed, double shear = 
 std::vector<double> brute_force_areas(const std::vector<Point>& x, const Box<2>& box) {
   std::vector<double> out;
   for (std::size_t a = 0; a < x.size(); ++a) {
-    ConvexPolygon cell = detail::initial_cell(x[a], box, 1.0, 0.0), scratch;
+    ConvexPolygon cell = detail::initial_cell(x[a], box, 1.0, 0.0);
     for (std::size_t b = 0; b < x.size(); ++b)
       for (int ix = -1; ix <= 1; ++ix)
         for (int iy = -1; iy <= 1; ++iy) {
           if ((ix != 0 && !box.periodic(0)) || (iy != 0 && !box.periodic(1))) continue;
           if (b == a && ix == 0 && iy == 0) continue;
           const Point img = x[b] + Point(ix * (box.hi[0] - box.lo[0]), iy * (box.hi[1] - box.lo[1]));
-          detail::cut_by_bisector(cell, img - x[a], scratch);
+          const Point d = img - x[a];
+          clip_halfplane(cell, d, 0.5 * d.squaredNorm());  // keeps the half nearer x[a]
         }
     out.push_back(area(cell));
   }

@@ -27,6 +27,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <limits>
 #include <string>
@@ -59,9 +60,9 @@ inline void check_sites(const std::vector<Point>& x, const Box<2>& box) {
   }
 }
 
-inline SitesWithImages add_periodic_images(const std::vector<Point>& x, const Box<2>& box, double margin) {
-  SitesWithImages s;
-  s.x = x;
+/// Fills `s` with the particles and their periodic images (reusing its storage from call to call).
+inline void add_periodic_images(const std::vector<Point>& x, const Box<2>& box, double margin, SitesWithImages& s) {
+  s.x.assign(x.begin(), x.end());
   s.n_real = x.size();
   s.margin = margin;
   s.source.resize(x.size());
@@ -81,45 +82,53 @@ inline SitesWithImages add_periodic_images(const std::vector<Point>& x, const Bo
         s.source.push_back(s.source[i]);
       }
   }
-  return s;
 }
 
 /// The polygon a cell is cut from, in coordinates relative to the particle: the box (walls), the box
-/// widened by the image margin (periodic), and the closing disc (open axes).
+/// widened by the image margin (periodic), and the square circumscribing the closing disc (open axes;
+/// the disc itself is applied by close_with_disc once the neighbours have cut the cell).
 inline ConvexPolygon initial_cell(const Point& xa, const Box<2>& box, double margin, double closing_radius) {
   double lo[2], hi[2];
-  bool open = false;
   for (int k = 0; k < 2; ++k) {
     if (box.edge[k] == Edge::open) {
       lo[k] = -closing_radius;
       hi[k] = closing_radius;
-      open = true;
     } else {
       const double widen = box.periodic(k) ? margin : 0.0;
       lo[k] = box.lo[k] - widen - xa[k];
       hi[k] = box.hi[k] + widen - xa[k];
     }
   }
-  ConvexPolygon cell = ConvexPolygon::rectangle(lo[0], lo[1], hi[0], hi[1]);
-  if (open) {
-    // circumscribed 32-gon: its inradius is the closing radius
-    const int k = 32;
-    const double R = closing_radius / std::cos(3.14159265358979323846 / k);
-    cell = clip_convex(cell, ConvexPolygon::regular(Point::Zero(), R, k));
-  }
-  return cell;
+  return ConvexPolygon::rectangle(lo[0], lo[1], hi[0], hi[1]);
 }
 
-/// Cuts `cell` (relative to x_a) by the bisector with a site at relative position d: keeps |y| <= |y - d|.
-/// Returns whether the cell changed.
-inline bool cut_by_bisector(ConvexPolygon& cell, const Point& d, ConvexPolygon& scratch) {
-  const double offset = 0.5 * d.squaredNorm();
-  bool cuts = false;  // most candidates miss the cell: test before copying
-  for (int i = 0; i < cell.n && !cuts; ++i) cuts = d.dot(cell[i]) > offset;
-  if (!cuts) return false;
-  clip_halfplane(cell, d, offset, scratch);
-  cell = scratch;
-  return true;
+/// Cuts `in` (relative to x_a) by the half-plane normal . y <= offset into `out`. Returns false, leaving
+/// `out` alone, when no vertex lies beyond it: most candidates miss the cell, so test before clipping.
+inline bool cut_halfplane(const ConvexPolygon& in, const Point& normal, double offset, ConvexPolygon& out) {
+  bool cuts = false;
+  for (int i = 0; i < in.n && !cuts; ++i) cuts = normal.dot(in[i]) > offset;
+  if (cuts) clip_halfplane(in, normal, offset, out);
+  return cuts;
+}
+
+/// The bisector with a site at relative position d keeps |y| <= |y - d|, i.e. d . y <= |d|^2 / 2.
+inline bool cut_by_bisector(const ConvexPolygon& in, const Point& d, ConvexPolygon& out) {
+  return cut_halfplane(in, d, 0.5 * d.squaredNorm(), out);
+}
+
+/// Open axes: intersects the cell with a regular 32-gon whose inradius is the closing radius. Only a cell
+/// reaching beyond that radius is touched, which spares the clip for almost every cell.
+inline void close_with_disc(ConvexPolygon*& cell, ConvexPolygon*& scratch, const Box<2>& box, double closing_radius) {
+  if (box.edge[0] != Edge::open && box.edge[1] != Edge::open) return;
+  const double R2 = closing_radius * closing_radius;
+  bool beyond = false;
+  for (int i = 0; i < cell->n && !beyond; ++i) beyond = (*cell)[i].squaredNorm() > R2;
+  if (!beyond) return;
+  constexpr int sides = 32;
+  for (int k = 0; k < sides && !cell->empty(); ++k) {
+    const double phi = 2.0 * 3.14159265358979323846 * (k + 0.5) / sides;  // the edge normals of the 32-gon
+    if (cut_halfplane(*cell, Point(std::cos(phi), std::sin(phi)), closing_radius, *scratch)) std::swap(cell, scratch);
+  }
 }
 
 /// Mean spacing of n points in the box (open axes: their bounding box).
@@ -239,58 +248,109 @@ inline int builder_threads() {
 class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
  private:
   friend class detail::WideningBuilder<LocalVoronoi>;
+  struct Candidate {
+    double d2;  ///< squared distance
+    Point d;    ///< position relative to the cell's particle
+  };
+  // Sorts by distance through keys that pack a distance's leading bits with the candidate's slot (the
+  // bits of a non-negative double order like the double): insertion sort on integers, since a ring holds
+  // a few dozen points. Ties cut in either order give the same cell.
+  static void sort_by_distance(std::vector<Candidate>& c, std::vector<std::uint64_t>& keys,
+                               std::vector<Candidate>& sorted) {
+    const std::size_t n = c.size();
+    if (n > 0xffff) {  // far more than any cell list block holds; the slots would not fit the keys
+      std::sort(c.begin(), c.end(), [](const Candidate& l, const Candidate& r) { return l.d2 < r.d2; });
+      return;
+    }
+    keys.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      std::uint64_t bits;
+      std::memcpy(&bits, &c[i].d2, sizeof bits);
+      keys[i] = (bits & ~std::uint64_t{0xffff}) | i;
+    }
+    for (std::size_t i = 1; i < n; ++i) {
+      const std::uint64_t key = keys[i];
+      std::size_t j = i;
+      for (; j > 0 && keys[j - 1] > key; --j) keys[j] = keys[j - 1];
+      keys[j] = key;
+    }
+    sorted.resize(n);
+    for (std::size_t i = 0; i < n; ++i) sorted[i] = c[keys[i] & 0xffff];
+    c.swap(sorted);
+  }
+
   template <class Visitor>
   bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
                  double margin, Visitor& visit) {
-    const SitesWithImages sites = detail::add_periodic_images(x, box, margin);
-    neighbors::CellList<2> cells;
-    cells.build(sites.x, detail::mean_spacing(x, box) * 1.5);
+    SitesWithImages& sites = sites_;
+    detail::add_periodic_images(x, box, margin, sites);
+    neighbors::CellList<2>& cells = cells_;
+    cells.build(sites.x, detail::mean_spacing(x, box) * 1.1);
     const std::int64_t max_ring = cells.max_ring();
     std::atomic<bool> ok{true};
     detail::run_parallel(sites.n_real, [&](int thread, std::size_t begin, std::size_t end) {
-      ConvexPolygon cell, scratch;
-      std::vector<std::pair<double, std::uint32_t>> ring_points;
+      ConvexPolygon buffers[2];
+      std::vector<Candidate> ring_points, sorted_points;
+      std::vector<std::uint64_t> keys;
       for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
         const Point xa = sites.x[a];
-        cell = detail::initial_cell(xa, box, margin, closing_radius.empty() ? 0.0 : closing_radius[a]);
-        double r2_max = detail::max_radius2_origin(cell);
-        // Cuts by the points of `ring_points`. The result does not depend on the order (a cell is the
-        // intersection of half-planes); a point beyond twice the farthest vertex cannot cut. Sorting by
-        // distance saves a few clips but cost more than it saved (measured: 37 % of the build time).
+        const double closing = closing_radius.empty() ? 0.0 : closing_radius[a];
+        ConvexPolygon* cell = &buffers[0];  // cuts alternate between the buffers instead of copying
+        ConvexPolygon* scratch = &buffers[1];
+        *cell = detail::initial_cell(xa, box, margin, closing);
+        double r2_max = detail::max_radius2_origin(*cell);
+        // Cuts by the points of `ring_points`, nearest first: the result does not depend on the order (a
+        // cell is the intersection of half-planes), but the nearest points carve out most of the cell, and
+        // once one lies beyond twice the farthest vertex, all the rest do too.
         auto cut_all = [&] {
-          for (const auto& [d2, b] : ring_points) {
-            if (d2 > 4.0 * r2_max) continue;
+          sort_by_distance(ring_points, keys, sorted_points);
+          for (const auto& [d2, d] : ring_points) {
+            if (d2 > 4.0 * r2_max) return;
             if (d2 == 0.0) {
-              cell.clear();
+              cell->clear();
               return;
             }
-            if (detail::cut_by_bisector(cell, sites.x[b] - xa, scratch)) r2_max = detail::max_radius2_origin(cell);
+            if (detail::cut_by_bisector(*cell, d, *scratch)) {
+              std::swap(cell, scratch);
+              r2_max = detail::max_radius2_origin(*cell);
+            }
           }
         };
         ring_points.clear();
         cells.for_each_candidate(xa, [&](std::uint32_t b) {  // rings 0 and 1 at once
-          if (b != a) ring_points.emplace_back((sites.x[b] - xa).squaredNorm(), b);
+          if (b == a) return;
+          const Point d = sites.x[b] - xa;
+          ring_points.push_back({d.squaredNorm(), d});
         });
         cut_all();
-        for (std::int64_t ring = 2; ring <= max_ring && !cell.empty(); ++ring) {
+        for (std::int64_t ring = 2; ring <= max_ring && !cell->empty(); ++ring) {
           // stop once every unseen point lies beyond the security radius
           if (cells.unseen_distance(xa, ring - 1) > 2.0 * std::sqrt(r2_max)) break;
           ring_points.clear();
-          cells.for_each_in_ring(xa, ring, [&](std::uint32_t b) {
-            if (b != a) ring_points.emplace_back((sites.x[b] - xa).squaredNorm(), b);
-          });
+          cells.for_each_in_ring(
+              xa, ring,
+              [&](std::uint32_t b) {
+                const Point d = sites.x[b] - xa;
+                if (const double d2 = d.squaredNorm(); d2 <= 4.0 * r2_max) ring_points.push_back({d2, d});
+              },
+              2.0 * std::sqrt(r2_max));  // only the part of the ring the security disc reaches
           cut_all();
         }
-        detail::check_coincident(cell, a);
-        if (detail::needs_more_images(cell, xa, box, margin)) {
+        detail::check_coincident(*cell, a);
+        detail::close_with_disc(cell, scratch, box, closing);
+        if (detail::needs_more_images(*cell, xa, box, margin)) {
           ok.store(false, std::memory_order_relaxed);
           break;
         }
-        visit(thread, a, cell);
+        visit(thread, a, *cell);
       }
     });
     return ok;
   }
+
+  // Kept from build to build: a remap every few dozen steps would otherwise fault in fresh pages each time.
+  SitesWithImages sites_;
+  neighbors::CellList<2> cells_;
 };
 
 /// Boost.Polygon builder: Voronoi neighbours from construct_voronoi on quantized positions, cells cut
@@ -304,7 +364,8 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
   template <class Visitor>
   bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
                  double margin, Visitor& visit) {
-    const SitesWithImages sites = detail::add_periodic_images(x, box, margin);
+    SitesWithImages sites;
+    detail::add_periodic_images(x, box, margin, sites);
     const std::size_t n_sites = sites.x.size();
     // Quantize; points that share integer coordinates form one group (Boost keeps one of them).
     Point lo = sites.x[0], hi = sites.x[0];
@@ -345,33 +406,37 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
     }
     std::atomic<bool> ok{true};
     detail::run_parallel(sites.n_real, [&](int thread, std::size_t begin, std::size_t end) {
-      ConvexPolygon cell, scratch;
+      ConvexPolygon buffers[2];
       for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
         const Point xa = sites.x[a];
-        cell = detail::initial_cell(xa, box, margin, closing_radius.empty() ? 0.0 : closing_radius[a]);
+        const double closing = closing_radius.empty() ? 0.0 : closing_radius[a];
+        ConvexPolygon* cell = &buffers[0];
+        ConvexPolygon* scratch = &buffers[1];
+        *cell = detail::initial_cell(xa, box, margin, closing);
         const std::uint32_t g = group_of[a];
         auto cut_group = [&](std::uint32_t group) {
           for (std::uint32_t b : members[group]) {
             if (b == a) continue;
             const Point d = sites.x[b] - xa;
             if (d.squaredNorm() == 0.0) {
-              cell.clear();
+              cell->clear();
               return;
             }
-            detail::cut_by_bisector(cell, d, scratch);
+            if (detail::cut_by_bisector(*cell, d, *scratch)) std::swap(cell, scratch);
           }
         };
         cut_group(g);
         for (std::uint32_t nb : adjacent[g]) {
-          if (cell.empty()) break;
+          if (cell->empty()) break;
           cut_group(nb);
         }
-        detail::check_coincident(cell, a);
-        if (detail::needs_more_images(cell, xa, box, margin)) {
+        detail::check_coincident(*cell, a);
+        detail::close_with_disc(cell, scratch, box, closing);
+        if (detail::needs_more_images(*cell, xa, box, margin)) {
           ok.store(false, std::memory_order_relaxed);
           break;
         }
-        visit(thread, a, cell);
+        visit(thread, a, *cell);
       }
     });
     return ok.load();

@@ -52,8 +52,8 @@ class CellList {
     }
     for (std::size_t c = 0; c < n_cells; ++c) cell_start_[c + 1] += cell_start_[c];
     sorted_.resize(n);
-    std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) sorted_[fill[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
+    fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
+    for (std::size_t i = 0; i < n; ++i) sorted_[fill_[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
   }
 
   /// Calls f(j) for every point j in the 3^D cells around position p.
@@ -82,18 +82,26 @@ class CellList {
     for_each_in_block(lo, hi, f);
   }
 
-  /// Calls f(j) for every point j in the cells at Chebyshev distance exactly `ring` from p's cell.
+  /// Calls f(j) for every point j in the cells at Chebyshev distance exactly `ring` from p's cell that
+  /// meet the square of half-width `radius` around p (all of the ring by default).
   /// Every point outside rings 0..k lies farther than k * cell_size() from p.
   template <class F>
-  void for_each_in_ring(const Vec<D>& p, std::int64_t ring, F&& f) const {
+  void for_each_in_ring(const Vec<D>& p, std::int64_t ring, F&& f,
+                        double radius = std::numeric_limits<double>::infinity()) const {
     const auto c = coords(p);
-    std::array<std::int64_t, D> lo, hi;
+    std::array<std::int64_t, D> lo, hi, first, last;
     for (int k = 0; k < D; ++k) {
       lo[k] = c[k] - ring;
       hi[k] = c[k] + ring;
+      first[k] = std::max<std::int64_t>(lo[k], 0);
+      last[k] = std::min(hi[k], dims_[k] - 1);
+      if (radius < std::numeric_limits<double>::infinity()) {
+        first[k] = std::max(first[k], static_cast<std::int64_t>(std::floor((p[k] - radius - lo_[k]) * inv_size_)));
+        last[k] = std::min(last[k], static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)));
+      }
+      if (first[k] > last[k]) return;
     }
-    std::array<std::int64_t, D> idx;
-    for (int k = 0; k < D; ++k) idx[k] = std::max<std::int64_t>(lo[k], 0);
+    std::array<std::int64_t, D> idx = first;
     for (;;) {
       bool on_ring = false;
       for (int k = 0; k < D; ++k) on_ring |= idx[k] == lo[k] || idx[k] == hi[k];
@@ -103,8 +111,8 @@ class CellList {
       }
       int k = 0;
       for (; k < D; ++k) {
-        if (++idx[k] <= std::min(hi[k], dims_[k] - 1)) break;
-        idx[k] = std::max<std::int64_t>(lo[k], 0);
+        if (++idx[k] <= last[k]) break;
+        idx[k] = first[k];
       }
       if (k == D) break;
     }
@@ -168,7 +176,7 @@ class CellList {
   Vec<D> lo_ = Vec<D>::Zero();
   double inv_size_ = 1.0;
   std::array<std::int64_t, D> dims_{};
-  std::vector<std::uint32_t> cell_start_, sorted_;
+  std::vector<std::uint32_t> cell_start_, sorted_, fill_;  // fill_: build scratch, kept to reuse its storage
   std::vector<std::size_t> cell_of_;
 };
 
