@@ -77,3 +77,35 @@ TEST_CASE("rectangles tiling the plane partition a polygon's area to round-off",
     CHECK(std::abs(sum - area(cell)) / area(cell) < 1e-13);
   }
 }
+
+TEST_CASE("grid overlaps by Green's theorem agree with Boost.Geometry cell by cell", "[geometry]") {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<double> areas;
+  for (int trial = 0; trial < 200; ++trial) {
+    const ConvexPolygon cell = random_convex(rng, Point(0.3 * u(rng), 0.3 * u(rng)), 0.05 + 0.2 * std::abs(u(rng)));
+    const double dx = 0.0731, dy = 0.0519;
+    const Bounds b = bounds(cell);
+    const int i0 = static_cast<int>(std::floor(b.lo.x() / dx)), i1 = static_cast<int>(std::floor(b.hi.x() / dx));
+    const int j0 = static_cast<int>(std::floor(b.lo.y() / dy)), j1 = static_cast<int>(std::floor(b.hi.y() / dy));
+    std::vector<double> xs, ys;
+    for (int i = i0; i <= i1 + 1; ++i) xs.push_back(i * dx);
+    for (int j = j0; j <= j1 + 1; ++j) ys.push_back(j * dy);
+    const int n_i = i1 - i0 + 1, n_j = j1 - j0 + 1;
+    grid_overlaps(cell, xs.data(), n_i, ys.data(), n_j, areas);
+    double sum = 0.0;
+    for (int i = 0; i < n_i; ++i)
+      for (int j = 0; j < n_j; ++j) {
+        const auto rect = ConvexPolygon::rectangle(xs[i], ys[j], xs[i + 1], ys[j + 1]);
+        const double a = areas[static_cast<std::size_t>(i * n_j + j)];
+        CHECK(a == Approx(oracle_intersection_area(cell, rect)).margin(1e-15));
+        sum += a;
+      }
+    CHECK(std::abs(sum - area(cell)) / area(cell) < 1e-13);
+  }
+  // a polygon that is itself a grid cell lands in that cell alone, exactly
+  const auto square = ConvexPolygon::rectangle(0.25, 0.5, 0.5, 0.75);
+  const double xs[] = {0.0, 0.25, 0.5, 0.75}, ys[] = {0.25, 0.5, 0.75, 1.0};
+  grid_overlaps(square, xs, 3, ys, 3, areas);
+  for (int c = 0; c < 9; ++c) CHECK(areas[static_cast<std::size_t>(c)] == (c == 4 ? 0.0625 : 0.0));
+}

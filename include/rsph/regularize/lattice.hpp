@@ -102,6 +102,10 @@ struct Square {
     const double x0 = box.lo[0] + idx[0] * spacing - origin[0], y0 = box.lo[1] + idx[1] * spacing - origin[1];
     return geometry::ConvexPolygon::rectangle(x0, y0, x0 + spacing, y0 + spacing);
   }
+  /// Rectangular cells: the grid line `index` along `axis` (cells span lines i to i + 1), relative to `origin`.
+  double line(const Box<2>& box, int axis, std::int64_t index, double origin) const {
+    return box.lo[axis] + static_cast<double>(index) * spacing - origin;
+  }
   static constexpr bool rectangular_cells = true;
 };
 

@@ -59,7 +59,7 @@ class LatticeRegularizer {
     Record r;
     r.step = last_.step;
     r.time = last_.time;
-    r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_, region_);
+    r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_, region_, &workspace_);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     log_.push_back(r);
     return r.stats.kinetic_converted;
@@ -76,6 +76,7 @@ class LatticeRegularizer {
   RemapParams params_;
   Builder builder_;
   Region region_;
+  RemapWorkspace<Lattice::dim> workspace_;
   StepInfo last_;
   std::vector<Record> log_;
 };

@@ -145,8 +145,11 @@ double distance_to_coarser_block(const refine::BlockField<D>& field, const std::
 /// exactly as on a uniform lattice.
 template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
-                              Builder& builder, const RemapParams& params, const Region& region = {}) {
+                              Builder& builder, const RemapParams& params, const Region& region = {},
+                              RemapWorkspace<D>* workspace = nullptr) {
   ml.validate();
+  RemapWorkspace<D> local;
+  RemapWorkspace<D>& ws = workspace ? *workspace : local;
   const auto fine = ml.finest();
   detail::check_remap_input(p, fine, params);
   const std::int64_t ratio = std::int64_t{1} << ml.max_level;  // finest cells per level-0 cell and axis
@@ -159,7 +162,7 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
                   " must be a whole number of blocks (block size " + std::to_string(ml.spacing * ml.block_cells) + ")");
     }
   const auto grid = detail::candidate_grid(p, box, fine, params, align);
-  auto S = detail::accumulate_overlaps(p, box, fine, builder, params, grid, region);
+  auto& S = detail::accumulate_overlaps(p, box, fine, builder, params, grid, region, ws);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
 
@@ -289,9 +292,11 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
       if (k == static_cast<std::size_t>(D)) break;
     }
   };
-  const auto keep = detail::hand_on_sparse_cells<D>(cells, params, volume, for_each_neighbour, stats.dropped_cells);
+  auto& keep = ws.keep;
+  detail::hand_on_sparse_cells<D>(cells, params, volume, for_each_neighbour, stats.dropped_cells, keep);
 
-  std::vector<std::size_t> order(n_cells);
+  auto& order = ws.order;
+  order.resize(n_cells);
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::vector<std::size_t> block_of(n_cells);
   {

@@ -54,7 +54,7 @@ namespace detail {
 
 /// Per-thread sums over old particles for each new cell of a dense index grid.
 template <int D>
-struct Sums {
+struct alignas(64) Sums {          // one per thread: aligned so that no two threads write to one cache line
   std::vector<double> m, E, fill;  // eq. (6) numerator, total energy m (e + v^2/2), covered volume
   std::vector<Vec<D>> mv;          // eq. (8) numerator
   double max_mismatch = 0.0;
@@ -94,6 +94,20 @@ struct Sums {
     max_mismatch = std::max(max_mismatch, o.max_mismatch);
   }
 };
+
+}  // namespace detail
+
+/// Scratch a remap fills and empties: kept by a regularizer from one remap to the next, so that a run
+/// does not fault in fresh pages for every regularization (that cost as much as the overlaps).
+template <int D>
+struct RemapWorkspace {
+  std::vector<detail::Sums<D>> sums;  ///< per thread
+  std::vector<std::uint8_t> keep;
+  std::vector<std::size_t> order;
+  std::vector<double> closing;
+};
+
+namespace detail {
 
 inline std::int64_t wrap_index(std::int64_t i, std::int64_t period) {
   i %= period;
@@ -185,16 +199,19 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
 
 /// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
 /// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
-template <class Lattice, class Builder, int D, bool E, class Region = region::Unbounded>
-Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
-                            const RemapParams& params, const CellGrid<D>& grid, const Region& region = {}) {
+/// The sums land in workspace.sums[0].
+template <class Lattice, class Builder, int D, bool E, class Region>
+Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
+                             const RemapParams& params, const CellGrid<D>& grid, const Region& region,
+                             RemapWorkspace<D>& workspace) {
   static_assert(check_closing_region<Region>());
   static_assert(D == 2 || !Region::clips, "closing regions are two-dimensional");
   const std::size_t n_old = p.n_real;
   const auto& range = grid.range;
   auto flat = [&](std::array<std::int64_t, D> idx) { return grid.flat(idx); };
   const int n_threads = geometry::builder_threads();
-  std::vector<Sums<D>> sums(static_cast<std::size_t>(n_threads));
+  auto& sums = workspace.sums;
+  sums.resize(static_cast<std::size_t>(n_threads));
   for (auto& s : sums) s.resize(grid.n_cells);
   auto specific_energy = [&](std::size_t a) {
     if constexpr (E)
@@ -253,7 +270,8 @@ Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const
     }
   } else {
     static_assert(D == 2, "the remap supports 1D and 2D");
-    std::vector<double> closing;
+    auto& closing = workspace.closing;
+    closing.clear();
     if (box.edge[0] == Edge::open || box.edge[1] == Edge::open) {
       closing.resize(n_old);
       for (std::size_t a = 0; a < n_old; ++a) closing[a] = params.closing_radius_in_h * p.h[a];
@@ -265,7 +283,11 @@ Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const
       const Box<2>* box;
       const CellGrid<2>* grid;
       const Region* region;
-      std::vector<std::vector<std::pair<std::size_t, double>>> overlaps;
+      struct alignas(64) Scratch {  // per thread, a cache line apart
+        std::vector<std::pair<std::size_t, double>> overlaps;
+        std::vector<double> lines, omegas;
+      };
+      std::vector<Scratch> scratch;
 
       std::array<std::int64_t, 2> clamp_to_walls(std::array<std::int64_t, 2> idx) const {
         for (std::size_t k = 0; k < 2; ++k)
@@ -286,29 +308,47 @@ Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const
         }
       }
       void add_cell(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
-        auto& ov = overlaps[static_cast<std::size_t>(thread)];
+        auto& own = scratch[static_cast<std::size_t>(thread)];
+        auto& ov = own.overlaps;
         ov.clear();
         const Vec<2> xo = p->x[a];
         const geometry::Bounds cb = geometry::bounds(cell);
         const double cell_area = geometry::area(cell);
         const auto r = lattice->cells_touching(*box, Vec<2>(cb.lo + xo), Vec<2>(cb.hi + xo));
-        for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
-          for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
-            const std::array<std::int64_t, 2> idx{i, j};
-            const geometry::ConvexPolygon nc = lattice->cell(*box, idx, xo);
-            double omega;
-            if constexpr (Lattice::rectangular_cells)
-              omega = geometry::clipped_area_rect(cell, cb, cell_area, nc[0].x(), nc[0].y(), nc[2].x(), nc[2].y());
-            else
-              omega = geometry::area(geometry::clip_convex(cell, nc));
-            if (omega <= 0.0) continue;
-            std::int64_t f = grid->flat(idx);
-            if (f < 0) f = grid->flat(clamp_to_walls(idx));  // round-off sliver beyond a wall
-            if (f < 0)
-              throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
-                                   std::to_string(a) + ")");
-            ov.emplace_back(static_cast<std::size_t>(f), omega);
-          }
+        auto add_overlap = [&](std::array<std::int64_t, 2> idx, double omega) {
+          std::int64_t f = grid->flat(idx);
+          if (f < 0) f = grid->flat(clamp_to_walls(idx));  // round-off sliver beyond a wall
+          if (f < 0)
+            throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
+                                 std::to_string(a) + ")");
+          ov.emplace_back(static_cast<std::size_t>(f), omega);
+        };
+        if constexpr (Lattice::rectangular_cells) {
+          // All overlaps in one pass over the cell's edges; round-off crumbs in cells the old cell only
+          // touches (|omega| ~ 1e-16 of its area) are dropped, and V_o = sum omega keeps mass exact.
+          const auto n_i = static_cast<int>(r.hi[0] - r.lo[0] + 1), n_j = static_cast<int>(r.hi[1] - r.lo[1] + 1);
+          auto& lines = own.lines;
+          lines.resize(static_cast<std::size_t>(n_i + n_j + 2));
+          for (int c = 0; c <= n_i; ++c)
+            lines[static_cast<std::size_t>(c)] = lattice->line(*box, 0, r.lo[0] + c, xo[0]);
+          double* ys = lines.data() + n_i + 1;
+          for (int c = 0; c <= n_j; ++c) ys[c] = lattice->line(*box, 1, r.lo[1] + c, xo[1]);
+          auto& omegas = own.omegas;
+          geometry::grid_overlaps(cell, lines.data(), n_i, ys, n_j, omegas);
+          const double crumb = 1e-13 * cell_area;
+          for (int i = 0; i < n_i; ++i)
+            for (int j = 0; j < n_j; ++j) {
+              const double omega = omegas[static_cast<std::size_t>(i * n_j + j)];
+              if (omega > crumb) add_overlap({r.lo[0] + i, r.lo[1] + j}, omega);
+            }
+        } else {
+          for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
+            for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
+              const std::array<std::int64_t, 2> idx{i, j};
+              const double omega = geometry::area(geometry::clip_convex(cell, lattice->cell(*box, idx, xo)));
+              if (omega > 0.0) add_overlap(idx, omega);
+            }
+        }
         const double e_o = [&] {
           if constexpr (E)
             return p->u[a];
@@ -324,13 +364,13 @@ Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const
                     &box,
                     &grid,
                     &region,
-                    std::vector<std::vector<std::pair<std::size_t, double>>>(static_cast<std::size_t>(n_threads))};
+                    std::vector<typename Visitor::Scratch>(static_cast<std::size_t>(n_threads))};
     builder.build(p.x, box, closing, visitor);
   }
 
   // Reduce the per-thread sums (fixed order: the result does not depend on scheduling).
   for (std::size_t t = 1; t < sums.size(); ++t) sums[0].merge(sums[t]);
-  return std::move(sums[0]);
+  return sums[0];
 }
 
 /// Hands the share of every new cell that gets no particle on, so mass stays exactly conserved: a cell
@@ -338,12 +378,12 @@ Sums<D> accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const
 /// its fullest kept neighbour or, lacking one, to its heaviest neighbour that outweighs it (passes repeat,
 /// so shares flow towards kept cells along rising mass); a cell with no such neighbour keeps its particle.
 /// `volume(c)` is the volume of cell c; `for_each_neighbour(c, f)` calls f(g) for the cells g next to c.
-/// Returns the keep flags; `handed_on` counts the cells whose share moved.
+/// Fills the keep flags; `handed_on` counts the cells whose share moved.
 template <int D, class Volume, class ForEachNeighbour>
-std::vector<std::uint8_t> hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume,
-                                               ForEachNeighbour&& for_each_neighbour, std::size_t& handed_on) {
+void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume, ForEachNeighbour&& for_each_neighbour,
+                          std::size_t& handed_on, std::vector<std::uint8_t>& keep) {
   const std::size_t n_cells = S.m.size();
-  std::vector<std::uint8_t> keep(n_cells, 0);
+  keep.assign(n_cells, 0);
   const double min_mass = params.min_mass_ratio * *std::max_element(S.m.begin(), S.m.end());
   for (std::size_t c = 0; c < n_cells; ++c)
     keep[c] = S.fill[c] > params.min_fill * volume(c) && S.m[c] > 0.0 && S.m[c] >= min_mass;
@@ -382,7 +422,6 @@ std::vector<std::uint8_t> hand_on_sparse_cells(Sums<D>& S, const RemapParams& pa
   }
   for (std::size_t c = 0; c < n_cells; ++c)
     if (!keep[c] && S.m[c] > 0.0) keep[c] = 1;  // no neighbour to take its share
-  return keep;
 }
 
 /// Replaces `p` by one new particle per kept cell, in the order of `cells`: eq. (6) mass, eq. (8)
@@ -393,10 +432,14 @@ void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<st
                     const std::vector<std::size_t>& cells, Place&& place, RemapStats& stats) {
   double ke_before = 0.0, ke_after = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) ke_before += 0.5 * p.m[a] * p.v[a].squaredNorm();
-  ParticleSet<D, E> fresh;
+  stats.n_before = p.n_real;
+  // The old particles are spent (their sums are in S): the new ones take over their storage.
+  p.resize_all(0);
+  p.ghost_source.clear();
+  p.n_real = 0;
   std::size_t n_new = 0;
   for (std::size_t c : cells) n_new += keep[c] && S.m[c] > 0.0;
-  fresh.reserve(n_new);
+  p.reserve(n_new);
   for (std::size_t c : cells) {
     if (!keep[c] || !(S.m[c] > 0.0)) continue;
     const double m_n = S.m[c];
@@ -405,12 +448,10 @@ void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<st
     ke_after += ke;
     const double e_n = std::max(0.0, (S.E[c] - ke) / m_n);  // eq. (9) plus the converted kinetic energy
     const auto [site, h] = place(c);
-    fresh.add(m_n, site, v_n, h, e_n);
+    p.add(m_n, site, v_n, h, e_n);
   }
-  stats.n_before = p.n_real;
-  stats.n_after = fresh.n_real;
+  stats.n_after = p.n_real;
   stats.kinetic_converted = ke_before - ke_after;
-  p = std::move(fresh);
 }
 
 /// Calls f(g) for the up to 3^D - 1 cells of `grid` around cell c (wrapping periodic axes).
@@ -447,19 +488,25 @@ void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const
 /// Remaps `p` (real particles only, no ghosts) onto `lattice`; returns the statistics. New particles
 /// are stored in lattice order with h = h_over_dx * Delta; u absorbs the kinetic energy lost when the
 /// gas carries it. `region` closes the cells at open edges (region.hpp).
+/// `workspace` (optional) keeps scratch storage between remaps.
 template <class Lattice, class Builder, int D, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
-                              const RemapParams& params, const Region& region = {}) {
+                              const RemapParams& params, const Region& region = {},
+                              RemapWorkspace<D>* workspace = nullptr) {
   detail::check_remap_input(p, lattice, params);
+  RemapWorkspace<D> local;
+  RemapWorkspace<D>& ws = workspace ? *workspace : local;
   const auto grid = detail::candidate_grid(p, box, lattice, params);
-  auto S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region);
+  auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
   const double cell_volume = lattice.cell_volume();
-  const auto keep = detail::hand_on_sparse_cells<D>(
+  auto& keep = ws.keep;
+  detail::hand_on_sparse_cells<D>(
       S, params, [&](std::size_t) { return cell_volume; },
-      [&](std::size_t c, auto&& f) { detail::for_each_grid_neighbour(grid, c, f); }, stats.dropped_cells);
-  std::vector<std::size_t> order(grid.n_cells);
+      [&](std::size_t c, auto&& f) { detail::for_each_grid_neighbour(grid, c, f); }, stats.dropped_cells, keep);
+  auto& order = ws.order;
+  order.resize(grid.n_cells);
   std::iota(order.begin(), order.end(), std::size_t{0});
   const double h_new = params.h_over_dx * lattice.spacing;
   detail::emit_particles(
