@@ -17,6 +17,12 @@ namespace rsph::neighbors {
 struct NeighborList {
   std::vector<std::uint64_t> offset;  ///< neighbours of a: index[offset[a] .. offset[a+1])
   std::vector<std::uint32_t> index;
+  /// Per-thread gather buffers, kept between builds so that a list rebuilt every step reuses its pages.
+  struct alignas(64) Buffers {
+    std::vector<std::uint32_t> gathered;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> scattered;  ///< (row of a, b) from b's side
+  };
+  std::vector<Buffers> buffers;
 
   std::size_t count(std::size_t a) const { return offset[a + 1] - offset[a]; }
   std::size_t pairs() const { return index.size(); }
@@ -68,8 +74,7 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
   n_threads = omp_get_max_threads();
 #endif
   const std::size_t T = static_cast<std::size_t>(n_threads);
-  std::vector<std::vector<std::uint32_t>> local(T);
-  std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> extra(T);  // (row of a, b) from b's side
+  out.buffers.resize(T);
   const std::size_t n_all = x.size();
   auto chunk = [](std::size_t n, std::size_t t, std::size_t parts) { return n * t / parts; };
   // A point whose radius no query point falls short of has nothing to scatter: with one h for all
@@ -83,8 +88,8 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
 #ifdef _OPENMP
     t = static_cast<std::size_t>(omp_get_thread_num());
 #endif
-    auto& buf = local[t];
-    auto& ext = extra[t];
+    auto& buf = out.buffers[t].gathered;
+    auto& ext = out.buffers[t].scattered;
     buf.clear();
     ext.clear();
     // gather: a sees the b within its own radius
@@ -124,14 +129,14 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
     }
   }
   std::size_t n_extra = 0;
-  for (const auto& e : extra) n_extra += e.size();
+  for (const auto& b : out.buffers) n_extra += b.scattered.size();
   if (n_extra == 0) {
     for (std::size_t i = 0; i < n_rows; ++i) out.offset[i + 1] += out.offset[i];
     out.index.resize(out.offset[n_rows]);
     std::size_t pos = 0;
-    for (const auto& buf : local) {
-      std::copy(buf.begin(), buf.end(), out.index.begin() + static_cast<std::ptrdiff_t>(pos));
-      pos += buf.size();
+    for (const auto& b : out.buffers) {
+      std::copy(b.gathered.begin(), b.gathered.end(), out.index.begin() + static_cast<std::ptrdiff_t>(pos));
+      pos += b.gathered.size();
     }
     return;
   }
@@ -141,14 +146,14 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
   std::vector<std::uint64_t> gathered_start(n_rows + 1, 0);
   for (std::size_t i = 0; i < n_rows; ++i) gathered_start[i + 1] = gathered_start[i] + gathered[i];
   std::vector<std::uint64_t> extra_count(n_rows, 0);
-  for (const auto& e : extra)
-    for (const auto& pr : e) ++extra_count[pr.first];
+  for (const auto& b : out.buffers)
+    for (const auto& pr : b.scattered) ++extra_count[pr.first];
   out.offset[0] = 0;
   for (std::size_t i = 0; i < n_rows; ++i) out.offset[i + 1] = out.offset[i] + gathered[i] + extra_count[i];
   out.index.resize(out.offset[n_rows]);
   std::vector<std::uint32_t> all_gathered;
   all_gathered.reserve(gathered_start[n_rows]);
-  for (const auto& buf : local) all_gathered.insert(all_gathered.end(), buf.begin(), buf.end());
+  for (const auto& b : out.buffers) all_gathered.insert(all_gathered.end(), b.gathered.begin(), b.gathered.end());
   std::vector<std::uint64_t> fill(n_rows);
   for (std::size_t i = 0; i < n_rows; ++i) {
     std::copy(all_gathered.begin() + static_cast<std::ptrdiff_t>(gathered_start[i]),
@@ -156,8 +161,8 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
               out.index.begin() + static_cast<std::ptrdiff_t>(out.offset[i]));
     fill[i] = out.offset[i] + gathered[i];
   }
-  for (const auto& e : extra)
-    for (const auto& pr : e) out.index[fill[pr.first]++] = pr.second;
+  for (const auto& b : out.buffers)
+    for (const auto& pr : b.scattered) out.index[fill[pr.first]++] = pr.second;
 }
 
 /// Neighbours of the first n_query points (row a holds point a's).

@@ -45,6 +45,10 @@ struct Adaptive {
   double dN_max = 0.4;
   std::uint64_t max_steps = 128;
 
+  Adaptive() = default;
+  Adaptive(double n_min, double n_max, double dn_max, std::uint64_t steps_cap)
+      : N_min(n_min), N_max(n_max), dN_max(dn_max), max_steps(steps_cap) {}
+
   /// Why the last check fired (for logs): 0 none, 1 N below N_min, 2 above N_max, 3 spread, 4 step cap.
   int last_reason = 0;
 
@@ -88,7 +92,7 @@ struct Adaptive {
     if (s.steps_since_last >= max_steps) return (last_reason = 4), true;
     if (!s.neighbors) return false;
     const auto& nl = *s.neighbors;
-    std::vector<double> N;
+    auto& N = N_;
     if (s.number_density) {  // eq. (A1) summed by the driver's density pass
       N.resize(p.n_real);
       const auto& n_a = *s.number_density;
@@ -120,6 +124,8 @@ struct Adaptive {
     last_reason = reason(first);
     return true;
   }
+
+  std::vector<double> N_;  ///< scratch: N_a of eq. (A2), kept between checks to reuse its storage
 };
 
 }  // namespace rsph::schedule
