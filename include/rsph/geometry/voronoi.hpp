@@ -305,7 +305,8 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
         auto cut_all = [&] {
           sort_by_distance(ring_points, keys, sorted_points);
           for (const auto& [d2, d] : ring_points) {
-            if (d2 > 4.0 * r2_max) return;
+            // the keys order distances to 2^-36 relative: stop only clearly beyond the security radius
+            if (d2 > 4.0 * r2_max * (1.0 + 1e-9)) return;
             if (d2 == 0.0) {
               cell->clear();
               return;
