@@ -54,6 +54,8 @@ class CellList {
     sorted_.resize(n);
     fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
     for (std::size_t i = 0; i < n; ++i) sorted_[fill_[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
+    sorted_x_.resize(n);
+    for (std::size_t k = 0; k < n; ++k) sorted_x_[k] = x[sorted_[k]];
   }
 
   /// Calls f(j) for every point j in the 3^D cells around position p.
@@ -73,13 +75,27 @@ class CellList {
   template <class F>
   void for_each_within(const Vec<D>& p, double radius, F&& f) const {
     std::array<std::int64_t, D> lo, hi;
-    for (int k = 0; k < D; ++k) {
-      lo[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - radius - lo_[k]) * inv_size_)), 0,
-                                       dims_[k] - 1);
-      hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)), 0,
-                                       dims_[k] - 1);
-    }
+    block_within(p, radius, lo, hi);
     for_each_in_block(lo, hi, f);
+  }
+
+  /// As for_each_within, calling f(j, x_j) with the position read from a copy in cell order, so the
+  /// candidates of a cell lie next to each other in memory.
+  template <class F>
+  void for_each_within_at(const Vec<D>& p, double radius, F&& f) const {
+    std::array<std::int64_t, D> lo, hi;
+    block_within(p, radius, lo, hi);
+    std::array<std::int64_t, D> idx = lo;
+    for (;;) {
+      const std::size_t cell = cell_index(idx);
+      for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s], sorted_x_[s]);
+      int k = 0;
+      for (; k < D; ++k) {
+        if (++idx[k] <= hi[k]) break;
+        idx[k] = lo[k];
+      }
+      if (k == D) break;
+    }
   }
 
   /// Calls f(j) for every point j in the cells at Chebyshev distance exactly `ring` from p's cell that
@@ -160,6 +176,17 @@ class CellList {
     }
   }
 
+  // The index block of the cells meeting the square of half-width `radius` around p.
+  void block_within(const Vec<D>& p, double radius, std::array<std::int64_t, D>& lo,
+                    std::array<std::int64_t, D>& hi) const {
+    for (int k = 0; k < D; ++k) {
+      lo[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - radius - lo_[k]) * inv_size_)), 0,
+                                       dims_[k] - 1);
+      hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)), 0,
+                                       dims_[k] - 1);
+    }
+  }
+
   std::array<std::int64_t, D> coords(const Vec<D>& p) const {
     std::array<std::int64_t, D> c;
     for (int k = 0; k < D; ++k)
@@ -178,6 +205,7 @@ class CellList {
   std::array<std::int64_t, D> dims_{};
   std::vector<std::uint32_t> cell_start_, sorted_, fill_;  // fill_: build scratch, kept to reuse its storage
   std::vector<std::size_t> cell_of_;
+  std::vector<Vec<D>> sorted_x_;  // positions in cell order
 };
 
 }  // namespace rsph::neighbors

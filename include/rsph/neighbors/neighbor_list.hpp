@@ -99,11 +99,12 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
       const double ha = h[a];
       const double own = reach_of(ha, ha);
       std::uint64_t n = 0;
-      cells.for_each_within(xa, own, [&](std::uint32_t b) {
-        if (b == a) return;
+      const double own2 = own * own;
+      cells.for_each_within_at(xa, own, [&](std::uint32_t b, const Vec<D>& xb) {
+        const double r2 = (xa - xb).squaredNorm();
+        if (r2 >= own2 || b == a) return;  // most candidates end here, before h_b is read
         const double reach = reach_of(ha, h[b]);
-        const double r2 = (xa - x[b]).squaredNorm();
-        if (r2 < reach * reach && r2 < own * own) {
+        if (r2 < reach * reach) {
           buf.push_back(b);
           ++n;
         }
