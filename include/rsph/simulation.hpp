@@ -25,6 +25,7 @@
 #include <limits>
 #include <string>
 #include <tuple>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -384,6 +385,8 @@ class Simulation {
     v_sig_.resize(n);
     if constexpr (with_drho) drho_dt_.resize(n);
     const std::size_t n_rows = rows.size();
+    const auto forces_now =
+        std::apply([&](const auto&... term) { return std::tuple{body_force_now(term)...}; }, terms_);
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n_rows; ++i) {
       const std::uint32_t a = rows[i];
@@ -434,7 +437,7 @@ class Simulation {
         }
       }
       if constexpr (has_stress) v_sig = std::max(v_sig, std::get<stress_index()>(terms_).signal_speed(h_a));
-      std::apply([&](const auto&... term) { (add_body_force(term, p_.x[a], dv), ...); }, terms_);
+      std::apply([&](const auto&... force) { (add_body_force(force, p_.x[a], dv), ...); }, forces_now);
       p_.dv_dt[a] = dv;
       if constexpr (has_energy) p_.du_dt[a] = du;
       if constexpr (with_drho) drho_dt_[a] = drho;
@@ -462,9 +465,26 @@ class Simulation {
     }
   }
 
+  /// Each term's body force at the current time (nothing for other terms), taken once per force pass.
+  struct NoBodyForce {};
   template <class T>
-  void add_body_force(const T& term, const Vec<D>& x, Vec<D>& dv) const {
-    if constexpr (BodyForce<T, D>) dv += term.acceleration(x, time_);
+  struct BodyForceAt {
+    const T* term;
+    double time;
+    Vec<D> acceleration(const Vec<D>& x) const { return term->acceleration(x, time); }
+  };
+  template <class T>
+  auto body_force_now(const T& term) const {
+    if constexpr (BodyForceAtTime<T, D>)
+      return term.at(time_);
+    else if constexpr (BodyForce<T, D>)
+      return BodyForceAt<T>{&term, time_};
+    else
+      return NoBodyForce{};
+  }
+  template <class F>
+  static void add_body_force(const F& force, const Vec<D>& x, Vec<D>& dv) {
+    if constexpr (!std::is_same_v<F, NoBodyForce>) dv += force.acceleration(x);
   }
 
   static constexpr double kHMargin = 1.25;  // search radius over h while h is solved

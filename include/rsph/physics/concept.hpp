@@ -29,6 +29,13 @@ concept BodyForce = requires(const T& t, const Vec<D>& x, double time) {
   { t.acceleration(x, time) } -> std::same_as<Vec<D>>;
 };
 
+/// A body force whose time dependence can be evaluated once per force pass: t.at(time) returns an object
+/// with acceleration(x) (orbits, ramps), so the pass does not repeat it for every particle.
+template <class T, int D>
+concept BodyForceAtTime = BodyForce<T, D> && requires(const T& t, const Vec<D>& x, double time) {
+  { t.at(time).acceleration(x) } -> std::same_as<Vec<D>>;
+};
+
 /// Adaptive smoothing lengths solved with the density (grad-h SPH); the driver switches to the grad-h
 /// density and force sums when a scene names one.
 template <class T>

@@ -46,14 +46,23 @@ struct StarAndPlanet {
     const double r = -a * q, phi = planet_phase(t);
     return {r * std::cos(phi), r * std::sin(phi)};
   }
-  /// Point-mass gravity of the star plus the softened planet.
-  Vec<2> acceleration(const Vec<2>& x, double t) const {
-    const Vec<2> d_s = x - star_position(t), d_p = x - planet_position(t);
-    const double r2_s = d_s.squaredNorm();
+  /// The pull at one instant: both bodies placed and the planet's mass ramped once.
+  struct AtTime {
+    Vec<2> star, planet;
+    double M_star, M_planet, eps2;
+    /// Point-mass gravity of the star plus the softened planet.
+    Vec<2> acceleration(const Vec<2>& x) const {
+      const Vec<2> d_s = x - star, d_p = x - planet;
+      const double r2_s = d_s.squaredNorm();
+      const double r2_p = d_p.squaredNorm() + eps2;
+      return (-M_star / (r2_s * std::sqrt(r2_s))) * d_s + (-M_planet / (r2_p * std::sqrt(r2_p))) * d_p;
+    }
+  };
+  AtTime at(double t) const {
     const double eps = softening * a;
-    const double r2_p = d_p.squaredNorm() + eps * eps;
-    return (-M_star / (r2_s * std::sqrt(r2_s))) * d_s + (-planet_mass_at(t) / (r2_p * std::sqrt(r2_p))) * d_p;
+    return {star_position(t), planet_position(t), M_star, planet_mass_at(t), eps * eps};
   }
+  Vec<2> acceleration(const Vec<2>& x, double t) const { return at(t).acceleration(x); }
 };
 
 }  // namespace rsph::physics
