@@ -22,6 +22,8 @@ struct Options {
   int dim = 1;
   std::string kernel = "cubic";
   int snapshots = 5;
+  bool consistent_gradient = false;
+  physics::ConsistentGradient gradient;
   ex::CommonOptions common;
 };
 
@@ -91,6 +93,10 @@ int run(const Options& opt, Sim sim) {
     summary.set("levels", ex::level_counts(sim.regularizer().log(), sim.steps()));
     summary.set("max_level", opt.rsph.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
   }
+  if constexpr (requires { sim.gradient_solves(); }) {
+    summary.set("gradient_solves", sim.gradient_solves());
+    summary.set("gradient_solve_iterations", sim.gradient_solve_iterations());
+  }
   summary.write(dir / "summary.json");
   fmt::print(
       "rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
@@ -103,6 +109,8 @@ int run(const Options& opt, Sim sim) {
 template <int D, class Kernel>
 int run_method(const Options& opt) {
   if (opt.method == "sph") return run<D, Kernel>(opt, scenes::make_sod<D, Kernel>(opt.sod));
+  if (opt.method == "rsph" && opt.consistent_gradient)
+    return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel>(opt.sod, opt.rsph, opt.gradient));
   if (opt.method == "rsph") return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel>(opt.sod, opt.rsph));
   throw InputError("unknown method '" + opt.method + "' (sph, rsph)");
 }
@@ -143,6 +151,10 @@ int main(int argc, char** argv) {
         "rsph: relative density jump between level-0 cells that refines a block")(
         "coarsen-below", ex::po::value(&opt.rsph.coarsen_below)->default_value(0.03),
         "rsph: jump below which a block returns to level 0")(
+        "consistent-gradient", ex::po::bool_switch(&opt.consistent_gradient),
+        "rsph: continuity density and pair gradients corrected so that level faces keep uniform states exact")(
+        "gradient-tolerance", ex::po::value(&opt.gradient.tolerance)->default_value(1e-12),
+        "rsph: relative residual of the consistent-gradient solve")(
         "max-bin", ex::po::value(&opt.rsph.max_bin)->default_value(0),
         "rsph: individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: global)")(
         "h-ramp", ex::po::value(&opt.rsph.h_ramp)->default_value(2.0),

@@ -99,14 +99,17 @@ struct RsphSodParams {
 template <int D, class Kernel>
 using RsphSodRegularizer =
     regularize::LatticeRegularizer<lattice::MultiLevel<D, refine::DensityJump>, schedule::EveryNSteps>;
-template <int D, class Kernel>
+template <int D, class Kernel, class... Extra>
 using RsphSodSimulation =
-    Simulation<D, Kernel, eos::IdealGas, RsphSodRegularizer<D, Kernel>, physics::ArtificialViscosity>;
+    Simulation<D, Kernel, eos::IdealGas, RsphSodRegularizer<D, Kernel>, physics::ArtificialViscosity, Extra...>;
 
 /// The tube on the finest lattice everywhere, then one remap onto the multi-level lattice, which puts
 /// the membrane on the finest level and the uniform states on level 0.
-template <int D, class Kernel>
-requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel> make_rsph_sod(const SodParams& s, const RsphSodParams& r) {
+/// `extra` terms join the artificial viscosity (physics::ConsistentGradient for exact level faces).
+template <int D, class Kernel, class... Extra>
+requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Extra...> make_rsph_sod(const SodParams& s,
+                                                                                const RsphSodParams& r,
+                                                                                Extra... extra) {
   s.validate();
   r.validate();
   const eos::IdealGas gas{s.gamma};
@@ -150,9 +153,9 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel> make_rsph_sod(const SodP
   TimeStepParams ts;
   ts.courant = s.courant;
   ts.max_bin = r.max_bin;
-  return RsphSodSimulation<D, Kernel>(
+  return RsphSodSimulation<D, Kernel, Extra...>(
       std::move(p), box, gas, RsphSodRegularizer<D, Kernel>(std::move(ml), schedule::EveryNSteps{r.cycle}, remap), ts,
-      physics::ArtificialViscosity{s.alpha, s.beta});
+      physics::ArtificialViscosity{s.alpha, s.beta}, extra...);
 }
 
 }  // namespace rsph::scenes

@@ -2,6 +2,7 @@
 // Composes the policies into a simulation. Owns the policies and the particle set, nothing else:
 // pair physics live in physics/, neighbour search in neighbors/, ghosts in boundary/.
 #include "rsph/boundary/ghosts.hpp"
+#include "rsph/core/conjugate_gradient.hpp"
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
@@ -13,6 +14,7 @@
 #include "rsph/neighbors/cell_list.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
 #include "rsph/physics/concept.hpp"
+#include "rsph/physics/consistent_gradient.hpp"
 #include "rsph/physics/hydro.hpp"
 #include "rsph/physics/shear_viscosity.hpp"
 #include "rsph/physics/smoothing_length.hpp"
@@ -58,6 +60,12 @@ class Simulation {
   /// A viscous stress term (Navier-Stokes) adds a velocity-gradient pass before the force sum.
   static constexpr bool has_stress = (StressTerm<Terms, D> || ...);
   static_assert((int(StressTerm<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one viscous stress term");
+  /// Consistent pair gradients (physics/consistent_gradient.hpp): the density follows the continuity
+  /// equation from the remapped rho = m / V, and pairs use G_ab, so uniform states are exact equilibria.
+  static constexpr bool corrected = (GradientCorrection<Terms> || ...);
+  static_assert((int(GradientCorrection<Terms>) + ... + 0) <= 1, "a simulation takes at most one gradient correction");
+  static_assert(!(corrected && grad_h),
+                "consistent gradients need fixed smoothing lengths (no smoothing-length solver)");
   /// Boundary zones (gas on fixed orbits) choose their members whenever the particle set is rebuilt.
   static constexpr bool has_zones = (BoundaryZone<Terms, D> || ...);
   using Particles = ParticleSet<D, has_energy>;
@@ -93,6 +101,10 @@ class Simulation {
   std::uint64_t regularizations() const { return regularizations_; }
   double kinetic_energy_removed() const { return kinetic_removed_; }
   const PhaseTimes& phase_times() const { return times_; }
+  /// The last psi solve of the gradient correction (summed over axes), and the solves so far.
+  const CgResult& gradient_solve() const requires corrected { return psi_solve_; }
+  std::uint64_t gradient_solves() const requires corrected { return psi_solves_; }
+  std::uint64_t gradient_solve_iterations() const requires corrected { return psi_iterations_; }
   Conservation<D> totals() const { return conservation(p_); }
 
   /// The next time step: the Courant and force conditions over all real, integrated particles.
@@ -116,8 +128,13 @@ class Simulation {
     const std::size_t n = p_.n_real;
     v_half_.resize(n);
     if constexpr (has_energy) u_half_.resize(n);
+    if constexpr (corrected) rho_half_.resize(n);
     for (std::size_t a = 0; a < n; ++a) {
       if (p_.frozen[a]) continue;
+      if constexpr (corrected) {  // the continuity equation, integrated like u
+        rho_half_[a] = p_.rho[a] + 0.5 * dt * drho_dt_[a];
+        p_.rho[a] = rho_half_[a] + 0.5 * dt * drho_dt_[a];
+      }
       v_half_[a] = p_.v[a] + 0.5 * dt * p_.dv_dt[a];
       p_.x[a] += dt * v_half_[a];
       keep_inside(a);
@@ -136,6 +153,7 @@ class Simulation {
       if (p_.frozen[a]) continue;
       p_.v[a] = v_half_[a] + 0.5 * dt * p_.dv_dt[a];
       if constexpr (has_energy) p_.u[a] = u_half_[a] + 0.5 * dt * p_.du_dt[a];
+      if constexpr (corrected) p_.rho[a] = rho_half_[a] + 0.5 * dt * drho_dt_[a];
     }
     times_.integrate += seconds_since(t0);
     ++step_;
@@ -252,6 +270,7 @@ class Simulation {
     const auto t0 = clock::now();
     p_.clear_ghosts();
     kinetic_removed_ += reg_.remap(p_, box_);
+    if constexpr (corrected) psi_.clear();  // new particles: solve afresh
     mark_zone_members();
     ++regularizations_;
     info_.steps_since_last = 0;
@@ -292,10 +311,16 @@ class Simulation {
     } else {
       build_neighbors(1.0);
       auto t0 = clock::now();
-      compute_density();
+      if constexpr (corrected) {
+        if constexpr (wants_number_density) density_rows(neighbors::FirstN{p_.n_real});  // n_a only
+        update_pressure();
+      } else {
+        compute_density();
+      }
       times_.density += seconds_since(t0);
     }
     auto t0 = clock::now();
+    if constexpr (corrected) solve_gradient_correction();
     if constexpr (has_stress) compute_stress();
     compute_forces();
     if (params_.max_bin > 0) {
@@ -345,7 +370,7 @@ class Simulation {
 
   /// Accelerations and heating rates over current neighbour lists and densities; for benchmarks.
   void compute_forces() {
-    if (params_.max_bin > 0)
+    if (params_.max_bin > 0 || corrected)
       force_rows<true>(neighbors::FirstN{p_.n_real});
     else
       force_rows<false>(neighbors::FirstN{p_.n_real});
@@ -372,7 +397,7 @@ class Simulation {
         rho += physics::density_term(m[b], W_ab);
         if constexpr (wants_number_density) n_a += W_ab;  // eq. (A1), for the regularization schedule
       }
-      p_.rho[a] = rho;
+      if constexpr (!corrected) p_.rho[a] = rho;
       if constexpr (wants_number_density) number_density_[a] = n_a;
     }
   }
@@ -426,7 +451,14 @@ class Simulation {
           if constexpr (has_energy) du += physics::pressure_heating_grad_h(pr);
         } else {
           pr.grad_W = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, pr.h_ab);
-          if constexpr (with_drho) drho += physics::continuity_term(pr.m_b, pr.v_ab, pr.grad_W);
+          if constexpr (corrected)
+            if (band_[a] && band_[b])
+              pr.grad_W =
+                  physics::consistent_gradient<D>(pr.grad_W, kernel::W<Kernel, D>(pr.r, pr.h_ab), psi_[a], psi_[b]);
+          if constexpr (corrected)
+            drho += physics::continuity_term_by_volume(pr.rho_a, pr.m_b / pr.rho_b, pr.v_ab, pr.grad_W);
+          else if constexpr (with_drho)
+            drho += physics::continuity_term(pr.m_b, pr.v_ab, pr.grad_W);
           dv += physics::pressure_acceleration(pr);
           if constexpr (has_energy) du += physics::pressure_heating(pr);
         }
@@ -497,6 +529,7 @@ class Simulation {
   }
   static constexpr std::size_t solver_index() { return first_of({SmoothingLengthSolver<Terms>...}); }
   static constexpr std::size_t stress_index() { return first_of({StressTerm<Terms, D>...}); }
+  static constexpr std::size_t correction_index() { return first_of({GradientCorrection<Terms>...}); }
   const auto& h_solver() const { return std::get<solver_index()>(terms_); }
 
   /// nabla_a W of a pair as the force sum uses it: at h_ab, or the mean of both h in grad-h SPH.
@@ -505,6 +538,169 @@ class Simulation {
       return 0.5 * (kernel::grad_W<Kernel, D>(r_ab, r, h_a) + kernel::grad_W<Kernel, D>(r_ab, r, h_b));
     else
       return kernel::grad_W<Kernel, D>(r_ab, r, 0.5 * (h_a + h_b));
+  }
+
+  /// psi of the consistent gradient (physics/consistent_gradient.hpp) on the band of particles around level
+  /// faces (those with a neighbour of another h, grown by term.band_layers neighbour layers); pairs with a
+  /// member outside keep grad W. Per axis k by conjugate gradients:
+  ///   sum_{b in band} w_ab (psi_a - s_b psi_src(b)) = V_a E_a,
+  /// where a ghost b stands for its source with s_b = -1 when it mirrors axis k (a mirrored psi flips its
+  /// normal component). Outside the band a uniform lattice has E = 0; so the band's flux balances and a
+  /// uniform state is exact. Warm-started from the last psi. Ghosts take their source's psi and membership.
+  void solve_gradient_correction() requires corrected {
+    const auto& term = std::get<correction_index()>(terms_);
+    const std::size_t n = p_.n_real, n_all = p_.size();
+    const bool fresh = psi_.size() < n;
+    auto source_of = [&](std::uint32_t b) -> std::size_t { return b < n ? b : p_.ghost_source[b - n]; };
+    if (fresh || term.every_step) {
+      // the band
+      band_.assign(n_all, 0);
+      for (std::size_t a = 0; a < n; ++a)
+        for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k)
+          if (std::abs(p_.h[nl_.index[k]] - p_.h[a]) > 1e-12 * p_.h[a]) {
+            band_[a] = 1;
+            break;
+          }
+      for (int layer = 0; layer < term.band_layers; ++layer) {
+        band_grow_.assign(band_.begin(), band_.begin() + static_cast<std::ptrdiff_t>(n));
+        for (std::size_t a = 0; a < n; ++a) {
+          if (band_[a]) continue;
+          for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k)
+            if (band_[source_of(nl_.index[k])]) {
+              band_grow_[a] = 1;
+              break;
+            }
+        }
+        std::copy(band_grow_.begin(), band_grow_.end(), band_.begin());
+      }
+      band_index_.assign(n, -1);
+      band_members_.clear();
+      for (std::size_t a = 0; a < n; ++a)
+        if (band_[a]) {
+          band_index_[a] = static_cast<std::int32_t>(band_members_.size());
+          band_members_.push_back(static_cast<std::uint32_t>(a));
+        }
+      const std::size_t m = band_members_.size();
+      std::vector<Vec<D>> psi_old;
+      if (!fresh) psi_old.assign(psi_.begin(), psi_.begin() + static_cast<std::ptrdiff_t>(n));
+      psi_.assign(n_all, Vec<D>::Zero());
+      psi_solve_ = CgResult{};
+      psi_solve_.converged = true;
+      if (m > 0) {
+        V_.resize(n_all);
+        for (std::size_t a = 0; a < n_all; ++a) V_[a] = p_.m[a] / p_.rho[a];
+        ghost_flips_.resize(n_all - n);
+        for (std::size_t g = n; g < n_all; ++g) {
+          const std::size_t src = p_.ghost_source[g - n];
+          std::uint8_t flips = 0;
+          for (int k = 0; k < D; ++k)
+            if (box_.edge[k] == Edge::reflecting && p_.x[g][k] != p_.x[src][k]) flips |= std::uint8_t(1u << k);
+          ghost_flips_[g - n] = flips;
+        }
+        pair_w_.resize(nl_.index.size());
+        for (auto& r : psi_rhs_) r.resize(m);
+#pragma omp parallel for schedule(static)
+        for (std::size_t i = 0; i < m; ++i) {
+          const std::uint32_t a = band_members_[i];
+          Vec<D> E = Vec<D>::Zero();
+          for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+            const std::uint32_t b = nl_.index[k];
+            const Vec<D> r_ab = p_.x[a] - p_.x[b];
+            const double r = r_ab.norm();
+            const double h_ab = 0.5 * (p_.h[a] + p_.h[b]);
+            const bool inside = r > 0.0 && band_[source_of(b)];
+            pair_w_[k] = inside ? physics::laplacian_weight(V_[a], V_[b], kernel::W<Kernel, D>(r, h_ab)) : 0.0;
+            if (r > 0.0) E += physics::zeroth_order_error_term<D>(V_[b], kernel::grad_W<Kernel, D>(r_ab, r, h_ab));
+          }
+          for (int k = 0; k < D; ++k) psi_rhs_[static_cast<std::size_t>(k)][i] = V_[a] * E[k];
+        }
+        // Connected pieces of the band, and per axis whether a mirror pair anchors a piece (otherwise psi
+        // is fixed only up to a constant there, and the right-hand side is kept in the range).
+        piece_.assign(m, -1);
+        std::vector<std::array<bool, D>> anchored;
+        std::vector<std::size_t> stack;
+        for (std::size_t start = 0; start < m; ++start) {
+          if (piece_[start] >= 0) continue;
+          const auto id = static_cast<std::int32_t>(anchored.size());
+          anchored.push_back({});
+          piece_[start] = id;
+          stack.assign(1, start);
+          while (!stack.empty()) {
+            const std::uint32_t a = band_members_[stack.back()];
+            stack.pop_back();
+            for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+              if (pair_w_[k] == 0.0) continue;
+              const std::uint32_t b = nl_.index[k];
+              if (b >= n)
+                for (int ax = 0; ax < D; ++ax)
+                  if (ghost_flips_[b - n] & (1u << ax)) anchored.back()[static_cast<std::size_t>(ax)] = true;
+              const auto j = static_cast<std::size_t>(band_index_[source_of(b)]);
+              if (piece_[j] < 0) {
+                piece_[j] = id;
+                stack.push_back(j);
+              }
+            }
+          }
+        }
+        std::vector<double> diagonal(m), component(m), mean(anchored.size()), count(anchored.size());
+        for (int axis = 0; axis < D; ++axis) {
+          const auto bit = std::uint8_t(1u << axis);
+          auto sign_of = [&](std::uint32_t b) { return b >= n && (ghost_flips_[b - n] & bit) ? -1.0 : 1.0; };
+#pragma omp parallel for schedule(static)
+          for (std::size_t i = 0; i < m; ++i) {
+            const std::uint32_t a = band_members_[i];
+            double d = 0.0;
+            for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+              const std::uint32_t b = nl_.index[k];
+              d += pair_w_[k] * (source_of(b) == a ? 1.0 - sign_of(b) : 1.0);
+            }
+            diagonal[i] = d;
+          }
+          auto apply = [&](const std::vector<double>& in, std::vector<double>& out) {
+            out.resize(m);
+#pragma omp parallel for schedule(static)
+            for (std::size_t i = 0; i < m; ++i) {
+              const std::uint32_t a = band_members_[i];
+              double y = 0.0;
+              for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+                if (pair_w_[k] == 0.0) continue;
+                const std::uint32_t b = nl_.index[k];
+                y += pair_w_[k] * (in[i] - sign_of(b) * in[static_cast<std::size_t>(band_index_[source_of(b)])]);
+              }
+              out[i] = y;
+            }
+          };
+          auto& rhs = psi_rhs_[static_cast<std::size_t>(axis)];
+          std::fill(mean.begin(), mean.end(), 0.0);
+          std::fill(count.begin(), count.end(), 0.0);
+          for (std::size_t i = 0; i < m; ++i) {
+            mean[static_cast<std::size_t>(piece_[i])] += rhs[i];
+            count[static_cast<std::size_t>(piece_[i])] += 1.0;
+          }
+          for (std::size_t i = 0; i < m; ++i) {
+            const auto c = static_cast<std::size_t>(piece_[i]);
+            if (!anchored[c][static_cast<std::size_t>(axis)]) rhs[i] -= mean[c] / count[c];
+          }
+          for (std::size_t i = 0; i < m; ++i) component[i] = fresh ? 0.0 : psi_old[band_members_[i]][axis];
+          const CgResult res = conjugate_gradient(apply, diagonal, rhs, component, term.tolerance, term.max_iterations);
+          psi_solve_.iterations += res.iterations;
+          psi_solve_.relative_residual = std::max(psi_solve_.relative_residual, res.relative_residual);
+          psi_solve_.converged = psi_solve_.converged && res.converged;
+          for (std::size_t i = 0; i < m; ++i) psi_[band_members_[i]][axis] = component[i];
+        }
+      }
+      ++psi_solves_;
+      psi_iterations_ += static_cast<std::uint64_t>(psi_solve_.iterations);
+    }
+    psi_.resize(n_all);
+    band_.resize(n_all);
+    for (std::size_t g = n; g < n_all; ++g) {
+      const std::size_t src = p_.ghost_source[g - n];
+      psi_[g] = psi_[src];
+      band_[g] = band_[src];
+      for (int k = 0; k < D; ++k)
+        if (box_.edge[k] == Edge::reflecting && p_.x[g][k] != p_.x[src][k]) psi_[g][k] = -psi_[g][k];
+    }
   }
 
   /// Rates of the particles whose step ends now (active_): their neighbours, density and forces; every
@@ -686,6 +882,7 @@ class Simulation {
     params_.validate();
     require(params_.max_bin == 0 || (!grad_h && !has_stress),
             "individual time steps (max_bin > 0) need fixed smoothing lengths and no viscous stress term");
+    require(params_.max_bin == 0 || !corrected, "consistent gradients need one global time step (max_bin = 0)");
     validate_policy(eos_);
     validate_policy(reg_);
     std::apply([&](const auto&... term) { (validate_policy(term), ...); }, terms_);
@@ -696,6 +893,9 @@ class Simulation {
       require(p_.x[a].allFinite() && p_.v[a].allFinite(), who + "position and velocity must be finite");
       if constexpr (has_energy)
         require(p_.u[a] >= 0.0 && std::isfinite(p_.u[a]), who + "internal energy must be non-negative");
+      if constexpr (corrected)
+        require(p_.rho[a] > 0.0 && std::isfinite(p_.rho[a]),
+                who + "consistent gradients evolve the density from its initial value: give rho > 0 (m / V)");
       for (int k = 0; k < D; ++k)
         if (box_.edge[k] != Edge::open)
           require(p_.x[a][k] >= box_.lo[k] && p_.x[a][k] <= box_.hi[k],
@@ -736,6 +936,16 @@ class Simulation {
   std::vector<double> Omega_;           ///< grad-h factors (real and ghosts), only with a smoothing-length solver
   std::vector<Mat<D>> S_over_rho2_;     ///< viscous stress / rho^2 (real and ghosts), only with a stress term
   std::vector<Vec<D>> v_half_;
+  // consistent gradients only: psi (real and ghosts), volumes, pair weights, right-hand sides per axis,
+  // which axes each ghost mirrors, the half-step density, and the solver's record
+  std::vector<Vec<D>> psi_;
+  std::vector<double> V_, pair_w_, rho_half_;
+  std::array<std::vector<double>, D> psi_rhs_;
+  std::vector<std::uint8_t> ghost_flips_, band_, band_grow_;
+  std::vector<std::int32_t> band_index_, piece_;
+  std::vector<std::uint32_t> band_members_;
+  CgResult psi_solve_;
+  std::uint64_t psi_solves_ = 0, psi_iterations_ = 0;
   typename Particles::EnergyField u_half_;
   double time_ = 0.0;
   std::uint64_t step_ = 0;

@@ -59,9 +59,19 @@ concept BoundaryZone = requires(const T& t, const Vec<D>& x, Vec<D>& x_mut, Vec<
   t.advance(x_mut, v, dt);
 };
 
+/// Pair gradients corrected so that a uniform state is an exact equilibrium where h varies (level faces of
+/// a multi-level lattice), with the density from the continuity equation (physics/consistent_gradient.hpp).
+template <class T>
+concept GradientCorrection = requires(const T& t) {
+  requires T::corrects_gradient;
+  { t.tolerance } -> std::convertible_to<double>;
+  { t.max_iterations } -> std::convertible_to<int>;
+  { t.every_step } -> std::convertible_to<bool>;
+};
+
 template <class T, int D>
 concept Term = PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> ||
-    PrescribedMotion<T, D> || BoundaryZone<T, D>;
+    PrescribedMotion<T, D> || BoundaryZone<T, D> || GradientCorrection<T>;
 
 template <class T, int D>
 constexpr bool check_term() {
@@ -72,7 +82,8 @@ constexpr bool check_term() {
                 "`solves_smoothing_length` with `rho_of_h` and `h_of_rho` (adaptive h), or "
                 "`void prescribe(size_t i, Vec<D>& x, Vec<D>& v, double t) const` (prescribed motion), or "
                 "`bool contains(const Vec<D>&) const` with `void advance(Vec<D>& x, Vec<D>& v, double dt) const` "
-                "(boundary zone)");
+                "(boundary zone), or `corrects_gradient` with `tolerance`, `max_iterations` and `every_step` "
+                "(consistent pair gradients)");
   return true;
 }
 

@@ -14,6 +14,14 @@ inline double continuity_term(double m_b, const Vec<D>& v_ab, const Vec<D>& grad
   return m_b * v_ab.dot(grad_W);
 }
 
+/// The continuity equation in volume form, d rho_a / dt += rho_a V_b v_ab . nabla_a W_ab (Monaghan 1992
+/// eq. 2.9 with V_b = m_b / rho_b): where particle masses jump (a contact on one lattice), the rate of a
+/// particle follows its own density, not its heavier neighbours'.
+template <int D>
+inline double continuity_term_by_volume(double rho_a, double V_b, const Vec<D>& v_ab, const Vec<D>& grad_W) {
+  return rho_a * V_b * v_ab.dot(grad_W);
+}
+
 /// eq. (3) of the paper without Pi_ab: dv_a/dt += -m_b (P_b / rho_b^2 + P_a / rho_a^2) nabla_a W_ab.
 template <int D>
 inline Vec<D> pressure_acceleration(const Pair<D>& p) {

@@ -10,6 +10,7 @@
 #include "rsph/regularize/refinement.hpp"
 #include "rsph/regularize/remap.hpp"
 
+#include <algorithm>
 #include <map>
 #include <numeric>
 #include <string>
@@ -137,6 +138,218 @@ double distance_to_coarser_block(const refine::BlockField<D>& field, const std::
   return best;
 }
 
+/// New cells at level faces (2D). Old cells are Voronoi cells; the new cell of a site whose one-cell ring
+/// holds a cell of another level is taken as its Voronoi cell among the new sites too (as Fig. 1 of the
+/// paper draws both), not its lattice square, so that a set on the lattice remaps onto itself and a
+/// uniform state stays uniform. Elsewhere the two coincide. The face cells tile the same region F as
+/// their lattice squares (a union of finest cells); each old cell's share of F from the finest-cell pass
+/// is handed to the face cells in proportion to its exact overlaps with their Voronoi cells, so the remap
+/// stays exactly conservative. Replaces the face cells' sums in `cells` and their volumes in `volume`.
+template <class Builder, bool E, class Region>
+void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const lattice::Square& fine, Builder& builder,
+                      const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& ws,
+                      const std::vector<std::uint32_t>& owner,
+                      const std::vector<std::array<std::int64_t, 2>>& first_fine, const std::vector<std::int64_t>& span,
+                      const Vec<2>& origin, Sums<2>& cells, std::vector<double>& volume) {
+  using geometry::ConvexPolygon;
+  const double dx = fine.spacing;
+  const std::size_t n_cells = span.size();
+  auto owner_at = [&](std::int64_t i, std::int64_t j) -> std::int64_t {  // grid-relative finest index
+    const std::int64_t fl = grid.flat({grid.range.lo[0] + i, grid.range.lo[1] + j});
+    return fl < 0 ? -1 : static_cast<std::int64_t>(owner[static_cast<std::size_t>(fl)]);
+  };
+  auto site = [&](std::size_t c) {
+    return Vec<2>(origin[0] + (static_cast<double>(first_fine[c][0]) + 0.5 * static_cast<double>(span[c])) * dx,
+                  origin[1] + (static_cast<double>(first_fine[c][1]) + 0.5 * static_cast<double>(span[c])) * dx);
+  };
+  // Face cells: another level in the ring of finest cells around the footprint.
+  std::vector<std::int32_t> face_of(n_cells, -1);
+  std::vector<std::size_t> faces;
+  for (std::size_t c = 0; c < n_cells; ++c) {
+    const std::int64_t s = span[c], i0 = first_fine[c][0], j0 = first_fine[c][1];
+    bool face = false;
+    for (std::int64_t i = -1; i <= s && !face; ++i)
+      for (std::int64_t j = -1; j <= s && !face; ++j) {
+        if (i >= 0 && i < s && j >= 0 && j < s) continue;
+        const std::int64_t o = owner_at(i0 + i, j0 + j);
+        face = o >= 0 && span[static_cast<std::size_t>(o)] != s;
+      }
+    if (face) {
+      face_of[c] = static_cast<std::int32_t>(faces.size());
+      faces.push_back(c);
+    }
+  }
+  if (faces.empty()) return;
+  // Their Voronoi cells among the new sites (relative to their own site), and the face
+  // cells near each, which an old cell touching it may also overlap.
+  const std::size_t n_faces = faces.size();
+  std::vector<ConvexPolygon> polygon(n_faces);
+  std::vector<Vec<2>> face_site(n_faces);
+  std::vector<std::vector<std::uint32_t>> nearby(n_faces);
+  for (std::size_t k = 0; k < n_faces; ++k) {
+    const std::size_t c = faces[k];
+    const std::int64_t s = span[c], reach = 2 * s, i0 = first_fine[c][0], j0 = first_fine[c][1];
+    const Vec<2> xc = site(c);
+    const double half = 1.5 * static_cast<double>(s) * dx;
+    double lo[2] = {-half, -half}, hi[2] = {half, half};
+    for (int a = 0; a < 2; ++a)
+      if (box.edge[a] == Edge::reflecting) {
+        lo[a] = std::max(lo[a], box.lo[a] - xc[a]);
+        hi[a] = std::min(hi[a], box.hi[a] - xc[a]);
+      }
+    ConvexPolygon buffers[2];
+    ConvexPolygon* cell = &buffers[0];
+    ConvexPolygon* scratch = &buffers[1];
+    *cell = ConvexPolygon::rectangle(lo[0], lo[1], hi[0], hi[1]);
+    std::vector<std::pair<std::int64_t, Vec<2>>> seen;
+    for (std::int64_t i = i0 - reach; i < i0 + s + reach; ++i)
+      for (std::int64_t j = j0 - reach; j < j0 + s + reach; ++j) {
+        const std::int64_t o = owner_at(i, j);
+        if (o < 0 || static_cast<std::size_t>(o) == c) continue;
+        // the neighbour's site, shifted by the periods its finest cell was wrapped across
+        const auto g = grid.unflat(static_cast<std::size_t>(grid.flat({grid.range.lo[0] + i, grid.range.lo[1] + j})));
+        const Vec<2> shift(static_cast<double>(grid.range.lo[0] + i - g[0]) * dx,
+                           static_cast<double>(grid.range.lo[1] + j - g[1]) * dx);
+        const Vec<2> d = site(static_cast<std::size_t>(o)) + shift - xc;
+        bool repeat = false;
+        for (const auto& [q, dq] : seen) repeat = repeat || (q == o && (dq - d).squaredNorm() < 1e-12 * dx * dx);
+        if (repeat) continue;
+        seen.emplace_back(o, d);
+        if (geometry::detail::cut_by_bisector(*cell, d, *scratch)) std::swap(cell, scratch);
+        if (face_of[static_cast<std::size_t>(o)] >= 0)
+          nearby[k].push_back(static_cast<std::uint32_t>(face_of[static_cast<std::size_t>(o)]));
+      }
+    // drop repeated vertices (a cut through a vertex leaves one), which would be edges without a normal
+    ConvexPolygon& out = polygon[k];
+    out.clear();
+    for (int v = 0; v < cell->n; ++v) {
+      const Vec<2>& q = (*cell)[v];
+      if (out.n > 0 && (q - out[out.n - 1]).squaredNorm() <= 1e-24 * dx * dx) continue;
+      out.push(q);
+    }
+    while (out.n > 1 && (out[0] - out[out.n - 1]).squaredNorm() <= 1e-24 * dx * dx) --out.n;
+    face_site[k] = xc;
+    volume[c] = geometry::area(*cell);
+  }
+  for (auto& list : nearby) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  // Each old cell's share of F, handed out by exact overlaps with the face cells.
+  struct FaceSums {
+    std::vector<double> m, energy, fill;
+    std::vector<Vec<2>> mv;
+    void resize(std::size_t n) {
+      m.assign(n, 0.0);
+      energy.assign(n, 0.0);
+      fill.assign(n, 0.0);
+      mv.assign(n, Vec<2>::Zero());
+    }
+  };
+  struct HandOut {
+    const ParticleSet<2, E>* p;
+    const Box<2>* box;
+    const std::vector<std::uint32_t>* owner;
+    const std::vector<std::int32_t>* face_of;
+    const std::vector<ConvexPolygon>* polygon;
+    const std::vector<Vec<2>>* face_site;
+    const std::vector<std::vector<std::uint32_t>>* nearby;
+    std::vector<FaceSums> sums;
+    std::vector<std::vector<std::uint32_t>> candidates;
+    std::vector<std::vector<double>> omegas;
+    void restart() {
+      for (auto& s : sums) s.resize(s.m.size());
+    }
+    void operator()(int thread, std::size_t a, const ConvexPolygon& cell,
+                    const std::vector<std::pair<std::size_t, double>>& ov, double) {
+      double V_o = 0.0, A_F = 0.0, best = 0.0;
+      std::int32_t best_face = -1;
+      auto& cand = candidates[static_cast<std::size_t>(thread)];
+      cand.clear();
+      for (const auto& [f, omega] : ov) {
+        V_o += omega;
+        const std::int32_t k = (*face_of)[(*owner)[f]];
+        if (k < 0) continue;
+        A_F += omega;
+        if (omega > best) {
+          best = omega;
+          best_face = k;
+        }
+        cand.push_back(static_cast<std::uint32_t>(k));
+        for (const std::uint32_t q : (*nearby)[static_cast<std::size_t>(k)]) cand.push_back(q);
+      }
+      if (!(A_F > 0.0)) return;
+      std::sort(cand.begin(), cand.end());
+      cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+      const Vec<2> xo = p->x[a];
+      auto& om = omegas[static_cast<std::size_t>(thread)];
+      om.assign(cand.size(), 0.0);
+      double A_poly = 0.0;
+      for (std::size_t i = 0; i < cand.size(); ++i) {
+        const std::size_t k = cand[i];
+        Vec<2> d = (*face_site)[k] - xo;  // nearest periodic image of the face site
+        for (int ax = 0; ax < 2; ++ax)
+          if (box->edge[ax] == Edge::periodic) {
+            const double L = box->hi[ax] - box->lo[ax];
+            d[ax] -= L * std::round(d[ax] / L);
+          }
+        ConvexPolygon window = (*polygon)[k];
+        for (int v = 0; v < window.n; ++v) window.v[static_cast<std::size_t>(v)] += d;
+        om[i] = geometry::area(geometry::clip_convex(cell, window));
+        A_poly += om[i];
+      }
+      auto& S = sums[static_cast<std::size_t>(thread)];
+      const double density = p->m[a] / V_o;
+      const double specific_energy = [&] {
+        if constexpr (E)
+          return p->u[a] + 0.5 * p->v[a].squaredNorm();
+        else
+          return 0.5 * p->v[a].squaredNorm();
+      }();
+      auto add = [&](std::size_t k, double omega) {
+        const double dm = density * omega;  // eq. (6)
+        S.m[k] += dm;
+        S.mv[k] += dm * p->v[a];
+        S.energy[k] += dm * specific_energy;
+        S.fill[k] += omega;
+      };
+      if (!(A_poly > 0.5 * A_F)) {  // round-off slivers only: to the face cell it overlaps most
+        add(static_cast<std::size_t>(best_face), A_F);
+        return;
+      }
+      const double scale = A_F / A_poly;  // the finest-cell pass's share, so sums stay exact
+      for (std::size_t i = 0; i < cand.size(); ++i)
+        if (om[i] > 0.0) add(cand[i], om[i] * scale);
+    }
+  };
+  const auto n_threads = static_cast<std::size_t>(geometry::builder_threads());
+  HandOut hand_out{&p,
+                   &box,
+                   &owner,
+                   &face_of,
+                   &polygon,
+                   &face_site,
+                   &nearby,
+                   std::vector<FaceSums>(n_threads),
+                   std::vector<std::vector<std::uint32_t>>(n_threads),
+                   std::vector<std::vector<double>>(n_threads)};
+  for (auto& s : hand_out.sums) s.resize(n_faces);
+  for_each_old_cell(p, box, fine, builder, grid, region, ws, hand_out);
+  for (std::size_t k = 0; k < n_faces; ++k) {
+    const std::size_t c = faces[k];
+    cells.m[c] = 0.0;
+    cells.E[c] = 0.0;
+    cells.fill[c] = 0.0;
+    cells.mv[c] = Vec<2>::Zero();
+    for (const auto& s : hand_out.sums) {  // fixed order: independent of scheduling
+      cells.m[c] += s.m[k];
+      cells.E[c] += s.energy[k];
+      cells.fill[c] += s.fill[k];
+      cells.mv[c] += s.mv[k];
+    }
+  }
+}
+
 }  // namespace detail
 
 /// Remaps `p` onto a multi-level lattice: sets every block's level from the criterion (capped at the
@@ -262,7 +475,13 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
     cells.fill[c] += S.fill[f];
   }
 
-  auto volume = [&](std::size_t c) { return std::pow(ml.spacing_at(cell_level[c]), D); };
+  std::vector<double> cell_volume(n_cells);
+  for (std::size_t c = 0; c < n_cells; ++c) cell_volume[c] = std::pow(ml.spacing_at(cell_level[c]), D);
+  if constexpr (D == 2)
+    if (ml.max_level > 0)
+      detail::remap_face_cells(p, box, fine, builder, grid, region, ws, owner, first_fine, span, field.origin, cells,
+                               cell_volume);
+  auto volume = [&](std::size_t c) { return cell_volume[c]; };
   auto for_each_neighbour = [&](std::size_t c, auto&& f) {
     // owners of the finest cells in the one-cell ring around c's footprint
     const std::int64_t s = span[c];

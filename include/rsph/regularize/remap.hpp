@@ -197,6 +197,95 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
   return g;
 }
 
+/// Visits every old particle's closed Voronoi cell (2D) with its overlaps on the cells of `grid`:
+/// action(thread, a, cell, overlaps, cell_area), the cell relative to x_a and overlaps as (flat index,
+/// Omega). The builder may restart (wider periodic images): action.restart() then forgets what it saw.
+template <class Lattice, class Builder, bool E, class Region, class Action>
+void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Lattice& lattice, Builder& builder,
+                       const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& workspace, Action& action) {
+  struct Visitor {
+    const ParticleSet<2, E>* p;
+    const Lattice* lattice;
+    const Box<2>* box;
+    const CellGrid<2>* grid;
+    const Region* region;
+    Action* action;
+    struct alignas(64) Scratch {  // per thread, a cache line apart
+      std::vector<std::pair<std::size_t, double>> overlaps;
+      std::vector<double> lines, omegas;
+    };
+    std::vector<Scratch> scratch;
+
+    std::array<std::int64_t, 2> clamp_to_walls(std::array<std::int64_t, 2> idx) const {
+      for (std::size_t k = 0; k < 2; ++k)
+        if (box->edge[static_cast<int>(k)] == Edge::reflecting)
+          idx[k] = std::clamp(idx[k], grid->range.lo[k], grid->range.hi[k]);
+      return idx;
+    }
+    void restart() { action->restart(); }
+    void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
+      if constexpr (Region::clips) {
+        geometry::ConvexPolygon closed = cell;
+        region->clip(p->x[a], closed);
+        add_cell(thread, a, closed);
+      } else {
+        add_cell(thread, a, cell);
+      }
+    }
+    void add_cell(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
+      auto& own = scratch[static_cast<std::size_t>(thread)];
+      auto& ov = own.overlaps;
+      ov.clear();
+      const Vec<2> xo = p->x[a];
+      const geometry::Bounds cb = geometry::bounds(cell);
+      const double cell_area = geometry::area(cell);
+      const auto r = lattice->cells_touching(*box, Vec<2>(cb.lo + xo), Vec<2>(cb.hi + xo));
+      auto add_overlap = [&](std::array<std::int64_t, 2> idx, double omega) {
+        std::int64_t f = grid->flat(idx);
+        if (f < 0) f = grid->flat(clamp_to_walls(idx));  // round-off sliver beyond a wall
+        if (f < 0)
+          throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
+                               std::to_string(a) + ")");
+        ov.emplace_back(static_cast<std::size_t>(f), omega);
+      };
+      if constexpr (Lattice::rectangular_cells) {
+        // All overlaps in one pass over the cell's edges; round-off crumbs in cells the old cell only
+        // touches (|omega| ~ 1e-16 of its area) are dropped, and V_o = sum omega keeps mass exact.
+        const auto n_i = static_cast<int>(r.hi[0] - r.lo[0] + 1), n_j = static_cast<int>(r.hi[1] - r.lo[1] + 1);
+        auto& lines = own.lines;
+        lines.resize(static_cast<std::size_t>(n_i + n_j + 2));
+        for (int c = 0; c <= n_i; ++c) lines[static_cast<std::size_t>(c)] = lattice->line(*box, 0, r.lo[0] + c, xo[0]);
+        double* ys = lines.data() + n_i + 1;
+        for (int c = 0; c <= n_j; ++c) ys[c] = lattice->line(*box, 1, r.lo[1] + c, xo[1]);
+        auto& omegas = own.omegas;
+        geometry::grid_overlaps(cell, lines.data(), n_i, ys, n_j, omegas);
+        const double crumb = 1e-13 * cell_area;
+        for (int i = 0; i < n_i; ++i)
+          for (int j = 0; j < n_j; ++j) {
+            const double omega = omegas[static_cast<std::size_t>(i * n_j + j)];
+            if (omega > crumb) add_overlap({r.lo[0] + i, r.lo[1] + j}, omega);
+          }
+      } else {
+        for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
+          for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
+            const std::array<std::int64_t, 2> idx{i, j};
+            const double omega = geometry::area(geometry::clip_convex(cell, lattice->cell(*box, idx, xo)));
+            if (omega > 0.0) add_overlap(idx, omega);
+          }
+      }
+      (*action)(thread, a, cell, ov, cell_area);
+    }
+  };
+  Visitor visitor{&p,
+                  &lattice,
+                  &box,
+                  &grid,
+                  &region,
+                  &action,
+                  std::vector<typename Visitor::Scratch>(static_cast<std::size_t>(geometry::builder_threads()))};
+  builder.build(p.x, box, workspace.closing, visitor);
+}
+
 /// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
 /// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
 /// The sums land in workspace.sums[0].
@@ -276,79 +365,14 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
       closing.resize(n_old);
       for (std::size_t a = 0; a < n_old; ++a) closing[a] = params.closing_radius_in_h * p.h[a];
     }
-    struct Visitor {
+    struct AddToSums {
       std::vector<detail::Sums<2>>* sums;
       const ParticleSet<D, E>* p;
-      const Lattice* lattice;
-      const Box<2>* box;
-      const CellGrid<2>* grid;
-      const Region* region;
-      struct alignas(64) Scratch {  // per thread, a cache line apart
-        std::vector<std::pair<std::size_t, double>> overlaps;
-        std::vector<double> lines, omegas;
-      };
-      std::vector<Scratch> scratch;
-
-      std::array<std::int64_t, 2> clamp_to_walls(std::array<std::int64_t, 2> idx) const {
-        for (std::size_t k = 0; k < 2; ++k)
-          if (box->edge[static_cast<int>(k)] == Edge::reflecting)
-            idx[k] = std::clamp(idx[k], grid->range.lo[k], grid->range.hi[k]);
-        return idx;
-      }
       void restart() {
         for (auto& s : *sums) s.resize(s.m.size());
       }
-      void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
-        if constexpr (Region::clips) {
-          geometry::ConvexPolygon closed = cell;
-          region->clip(p->x[a], closed);
-          add_cell(thread, a, closed);
-        } else {
-          add_cell(thread, a, cell);
-        }
-      }
-      void add_cell(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
-        auto& own = scratch[static_cast<std::size_t>(thread)];
-        auto& ov = own.overlaps;
-        ov.clear();
-        const Vec<2> xo = p->x[a];
-        const geometry::Bounds cb = geometry::bounds(cell);
-        const double cell_area = geometry::area(cell);
-        const auto r = lattice->cells_touching(*box, Vec<2>(cb.lo + xo), Vec<2>(cb.hi + xo));
-        auto add_overlap = [&](std::array<std::int64_t, 2> idx, double omega) {
-          std::int64_t f = grid->flat(idx);
-          if (f < 0) f = grid->flat(clamp_to_walls(idx));  // round-off sliver beyond a wall
-          if (f < 0)
-            throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
-                                 std::to_string(a) + ")");
-          ov.emplace_back(static_cast<std::size_t>(f), omega);
-        };
-        if constexpr (Lattice::rectangular_cells) {
-          // All overlaps in one pass over the cell's edges; round-off crumbs in cells the old cell only
-          // touches (|omega| ~ 1e-16 of its area) are dropped, and V_o = sum omega keeps mass exact.
-          const auto n_i = static_cast<int>(r.hi[0] - r.lo[0] + 1), n_j = static_cast<int>(r.hi[1] - r.lo[1] + 1);
-          auto& lines = own.lines;
-          lines.resize(static_cast<std::size_t>(n_i + n_j + 2));
-          for (int c = 0; c <= n_i; ++c)
-            lines[static_cast<std::size_t>(c)] = lattice->line(*box, 0, r.lo[0] + c, xo[0]);
-          double* ys = lines.data() + n_i + 1;
-          for (int c = 0; c <= n_j; ++c) ys[c] = lattice->line(*box, 1, r.lo[1] + c, xo[1]);
-          auto& omegas = own.omegas;
-          geometry::grid_overlaps(cell, lines.data(), n_i, ys, n_j, omegas);
-          const double crumb = 1e-13 * cell_area;
-          for (int i = 0; i < n_i; ++i)
-            for (int j = 0; j < n_j; ++j) {
-              const double omega = omegas[static_cast<std::size_t>(i * n_j + j)];
-              if (omega > crumb) add_overlap({r.lo[0] + i, r.lo[1] + j}, omega);
-            }
-        } else {
-          for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
-            for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
-              const std::array<std::int64_t, 2> idx{i, j};
-              const double omega = geometry::area(geometry::clip_convex(cell, lattice->cell(*box, idx, xo)));
-              if (omega > 0.0) add_overlap(idx, omega);
-            }
-        }
+      void operator()(int thread, std::size_t a, const geometry::ConvexPolygon&,
+                      const std::vector<std::pair<std::size_t, double>>& ov, double cell_area) {
         const double e_o = [&] {
           if constexpr (E)
             return p->u[a];
@@ -358,14 +382,8 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
         (*sums)[static_cast<std::size_t>(thread)].add(ov, p->m[a], p->v[a], e_o, cell_area);
       }
     };
-    Visitor visitor{&sums,
-                    &p,
-                    &lattice,
-                    &box,
-                    &grid,
-                    &region,
-                    std::vector<typename Visitor::Scratch>(static_cast<std::size_t>(n_threads))};
-    builder.build(p.x, box, closing, visitor);
+    AddToSums add{&sums, &p};
+    for_each_old_cell(p, box, lattice, builder, grid, region, workspace, add);
   }
 
   // Reduce the per-thread sums (fixed order: the result does not depend on scheduling).
@@ -403,6 +421,7 @@ void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume
     return kept_best >= 0 ? kept_best : heavy_best;
   };
   handed_on = 0;
+  std::vector<double> moved_fill;  // allocated only when some share moves
   for (bool moved = true; moved;) {
     moved = false;
     for (std::size_t c = 0; c < n_cells; ++c) {
@@ -413,6 +432,9 @@ void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume
       S.m[b] += S.m[c];
       S.mv[b] += S.mv[c];
       S.E[b] += S.E[c];
+      if (moved_fill.empty()) moved_fill.assign(n_cells, 0.0);
+      moved_fill[b] += S.fill[c] + moved_fill[c];  // the volume goes with the mass (rho = m / volume)
+      moved_fill[c] = 0.0;
       S.m[c] = 0.0;
       S.mv[c] = Vec<D>::Zero();
       S.E[c] = 0.0;
@@ -420,12 +442,15 @@ void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume
       moved = true;
     }
   }
-  for (std::size_t c = 0; c < n_cells; ++c)
+  for (std::size_t c = 0; c < n_cells; ++c) {
     if (!keep[c] && S.m[c] > 0.0) keep[c] = 1;  // no neighbour to take its share
+    if (!moved_fill.empty()) S.fill[c] += moved_fill[c];
+  }
 }
 
 /// Replaces `p` by one new particle per kept cell, in the order of `cells`: eq. (6) mass, eq. (8)
-/// velocity, and u taking up the kinetic energy the averaging removed (eq. 9). `place(c)` gives the
+/// velocity, and u taking up the kinetic energy the averaging removed (eq. 9); rho is set to the mass over
+/// the covered volume (a kernel-summed density overwrites it). `place(c)` gives the
 /// site and smoothing length of cell c.
 template <int D, bool E, class Place>
 void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<std::uint8_t>& keep,
@@ -449,6 +474,7 @@ void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<st
     const double e_n = std::max(0.0, (S.E[c] - ke) / m_n);  // eq. (9) plus the converted kinetic energy
     const auto [site, h] = place(c);
     p.add(m_n, site, v_n, h, e_n);
+    p.rho.back() = m_n / S.fill[c];  // the remapped density, for schemes that do not sum eq. (2)
   }
   stats.n_after = p.n_real;
   stats.kinetic_converted = ke_before - ke_after;
