@@ -56,14 +56,14 @@ struct RsphSodRun {
   double mass_drift, energy_drift, mean_particles;
   int worst_level_step;
 };
-template <int D>
-RsphSodRun<D> run_rsph_sod(int n_left, int levels) {
+template <int D, class... Extra>
+RsphSodRun<D> run_rsph_sod(int n_left, int levels, Extra... extra) {
   scenes::SodParams s;
   s.n_left = n_left;
   s.ny_left = 8;
   scenes::RsphSodParams r;
   r.levels = levels;
-  auto sim = scenes::make_rsph_sod<D, kernel::CubicSpline>(s, r);
+  auto sim = scenes::make_rsph_sod<D, kernel::CubicSpline>(s, r, extra...);
   const auto start = sim.totals();
   double particle_steps = 0.0;
   int worst = 0;
@@ -102,8 +102,34 @@ TEST_CASE("RSPH Sod 1D on a uniform lattice and on a three-level lattice", "[sod
   CHECK(refined.energy_drift < 1e-4);
   CHECK(refined.worst_level_step <= 1);
   CHECK(refined.mean_particles < uniform.mean_particles);
-  // level faces with h_ab = (h_a + h_b) / 2 add noise: the refined run is within 4x of the uniform one
+  // level faces with h_ab = (h_a + h_b) / 2 alone add noise: the refined run is within 4x of the uniform one
   CHECK(refined.errors.L1_rho < 4.0 * uniform.errors.L1_rho);
+}
+
+TEST_CASE("RSPH Sod with consistent gradients: refined runs as accurate as the uniform finest lattice",
+          "[sod][multilevel]") {
+  // levels 0-2 against the uniform finest lattice, both with and without the correction
+  auto compare = [](auto uniform, auto uniform_cg, auto refined, auto refined_cg) {
+    INFO("uniform: L1(rho) " << uniform.errors.L1_rho << ", " << uniform.mean_particles << " particles");
+    INFO("uniform, consistent gradients: L1(rho) " << uniform_cg.errors.L1_rho << ", " << uniform_cg.mean_particles);
+    INFO("levels 0-2: L1(rho) " << refined.errors.L1_rho << ", " << refined.mean_particles);
+    INFO("levels 0-2, consistent gradients: L1(rho) " << refined_cg.errors.L1_rho << ", " << refined_cg.mean_particles);
+    CHECK(refined_cg.mass_drift < 1e-13);
+    CHECK(refined_cg.energy_drift < 1e-5);
+    CHECK(refined_cg.worst_level_step <= 1);
+    CHECK(refined_cg.mean_particles < 0.45 * uniform.mean_particles);
+    // within 5 % of the better uniform run, with less than half the particles
+    CHECK(refined_cg.errors.L1_rho < 1.05 * std::min(uniform.errors.L1_rho, uniform_cg.errors.L1_rho));
+    CHECK(refined_cg.errors.L1_rho < 0.5 * refined.errors.L1_rho);
+  };
+  SECTION("1D, n_left 200") {
+    compare(run_rsph_sod<1>(200, 0), run_rsph_sod<1>(200, 0, physics::ConsistentGradient{}), run_rsph_sod<1>(200, 2),
+            run_rsph_sod<1>(200, 2, physics::ConsistentGradient{}));
+  }
+  SECTION("2D strip, n_left 100") {
+    compare(run_rsph_sod<2>(100, 0), run_rsph_sod<2>(100, 0, physics::ConsistentGradient{}), run_rsph_sod<2>(100, 2),
+            run_rsph_sod<2>(100, 2, physics::ConsistentGradient{}));
+  }
 }
 
 TEST_CASE("RSPH Sod 2D strip on a two-level lattice conserves and tracks the exact solution", "[sod][multilevel]") {

@@ -350,6 +350,119 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
   }
 }
 
+/// The 1D counterpart of the above: a face cell's new cell is the interval between the midpoints to its
+/// neighbouring sites.
+template <bool E>
+void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const lattice::Uniform1D& fine,
+                      const RemapParams& params, const CellGrid<1>& grid, const std::vector<std::uint32_t>& owner,
+                      const std::vector<std::array<std::int64_t, 1>>& first_fine, const std::vector<std::int64_t>& span,
+                      const Vec<1>& origin, Sums<1>& cells, std::vector<double>& volume) {
+  const double dx = fine.spacing;
+  const std::size_t n_cells = span.size();
+  const double L = box.hi[0] - box.lo[0];
+  auto site = [&](std::size_t c) {
+    return origin[0] + (static_cast<double>(first_fine[c][0]) + 0.5 * static_cast<double>(span[c])) * dx;
+  };
+  // the owner of finest cell i (grid-relative) and the shift of its period; -1 beyond the grid
+  auto owner_at = [&](std::int64_t i, double& shift) -> std::int64_t {
+    const std::int64_t fl = grid.flat({grid.range.lo[0] + i});
+    if (fl < 0) return -1;
+    shift = static_cast<double>(grid.range.lo[0] + i - grid.unflat(static_cast<std::size_t>(fl))[0]) * dx;
+    return static_cast<std::int64_t>(owner[static_cast<std::size_t>(fl)]);
+  };
+  std::vector<std::int32_t> face_of(n_cells, -1);
+  std::vector<std::size_t> faces;
+  for (std::size_t c = 0; c < n_cells; ++c) {
+    double shift = 0.0;
+    const std::int64_t l = owner_at(first_fine[c][0] - 1, shift), r = owner_at(first_fine[c][0] + span[c], shift);
+    if ((l >= 0 && span[static_cast<std::size_t>(l)] != span[c]) ||
+        (r >= 0 && span[static_cast<std::size_t>(r)] != span[c])) {
+      face_of[c] = static_cast<std::int32_t>(faces.size());
+      faces.push_back(c);
+    }
+  }
+  if (faces.empty()) return;
+  const std::size_t n_faces = faces.size();
+  std::vector<double> lo(n_faces), hi(n_faces), face_site(n_faces);
+  std::vector<std::array<std::int32_t, 2>> beside(n_faces);
+  for (std::size_t k = 0; k < n_faces; ++k) {
+    const std::size_t c = faces[k];
+    const double xc = site(c), half = 0.5 * static_cast<double>(span[c]) * dx;
+    double shift = 0.0;
+    const std::int64_t l = owner_at(first_fine[c][0] - 1, shift);
+    lo[k] = l >= 0 ? 0.5 * (site(static_cast<std::size_t>(l)) + shift - xc) : -half;  // a wall or the grid's end
+    beside[k][0] = l >= 0 ? face_of[static_cast<std::size_t>(l)] : -1;
+    const std::int64_t r = owner_at(first_fine[c][0] + span[c], shift);
+    hi[k] = r >= 0 ? 0.5 * (site(static_cast<std::size_t>(r)) + shift - xc) : half;
+    beside[k][1] = r >= 0 ? face_of[static_cast<std::size_t>(r)] : -1;
+    face_site[k] = xc;
+    volume[c] = hi[k] - lo[k];
+  }
+  std::vector<double> m(n_faces, 0.0), energy(n_faces, 0.0), fill(n_faces, 0.0);
+  std::vector<Vec<1>> mv(n_faces, Vec<1>::Zero());
+  std::vector<std::int32_t> cand;
+  std::vector<double> om;
+  for_each_old_interval(p, box, fine, params, grid, [&](std::size_t a, double left, double right, const auto& ov) {
+    double V_o = 0.0, A_F = 0.0, best = 0.0;
+    std::int32_t best_face = -1;
+    cand.clear();
+    for (const auto& [f, omega] : ov) {
+      V_o += omega;
+      const std::int32_t k = face_of[owner[f]];
+      if (k < 0) continue;
+      A_F += omega;
+      if (omega > best) {
+        best = omega;
+        best_face = k;
+      }
+      cand.push_back(k);
+      for (const std::int32_t q : beside[static_cast<std::size_t>(k)])
+        if (q >= 0) cand.push_back(q);
+    }
+    if (!(A_F > 0.0)) return;
+    std::sort(cand.begin(), cand.end());
+    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+    const double xo = p.x[a][0];
+    om.assign(cand.size(), 0.0);
+    double A_poly = 0.0;
+    for (std::size_t i = 0; i < cand.size(); ++i) {
+      const auto k = static_cast<std::size_t>(cand[i]);
+      double d = face_site[k] - xo;  // nearest periodic image of the face site
+      if (box.edge[0] == Edge::periodic) d -= L * std::round(d / L);
+      om[i] = std::max(0.0, std::min(right, xo + d + hi[k]) - std::max(left, xo + d + lo[k]));
+      A_poly += om[i];
+    }
+    const double density = p.m[a] / V_o;
+    const double specific_energy = [&] {
+      if constexpr (E)
+        return p.u[a] + 0.5 * p.v[a].squaredNorm();
+      else
+        return 0.5 * p.v[a].squaredNorm();
+    }();
+    auto add = [&](std::size_t k, double omega) {
+      const double dm = density * omega;  // eq. (6)
+      m[k] += dm;
+      mv[k] += dm * p.v[a];
+      energy[k] += dm * specific_energy;
+      fill[k] += omega;
+    };
+    if (!(A_poly > 0.5 * A_F)) {  // round-off slivers only: to the face cell it overlaps most
+      add(static_cast<std::size_t>(best_face), A_F);
+      return;
+    }
+    const double scale = A_F / A_poly;  // the finest-cell pass's share, so sums stay exact
+    for (std::size_t i = 0; i < cand.size(); ++i)
+      if (om[i] > 0.0) add(static_cast<std::size_t>(cand[i]), om[i] * scale);
+  });
+  for (std::size_t k = 0; k < n_faces; ++k) {
+    const std::size_t c = faces[k];
+    cells.m[c] = m[k];
+    cells.E[c] = energy[k];
+    cells.fill[c] = fill[k];
+    cells.mv[c] = mv[k];
+  }
+}
+
 }  // namespace detail
 
 /// Remaps `p` onto a multi-level lattice: sets every block's level from the criterion (capped at the
@@ -477,10 +590,13 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
 
   std::vector<double> cell_volume(n_cells);
   for (std::size_t c = 0; c < n_cells; ++c) cell_volume[c] = std::pow(ml.spacing_at(cell_level[c]), D);
-  if constexpr (D == 2)
-    if (ml.max_level > 0)
+  if (ml.max_level > 0) {
+    if constexpr (D == 2)
       detail::remap_face_cells(p, box, fine, builder, grid, region, ws, owner, first_fine, span, field.origin, cells,
                                cell_volume);
+    else
+      detail::remap_face_cells(p, box, fine, params, grid, owner, first_fine, span, field.origin, cells, cell_volume);
+  }
   auto volume = [&](std::size_t c) { return cell_volume[c]; };
   auto for_each_neighbour = [&](std::size_t c, auto&& f) {
     // owners of the finest cells in the one-cell ring around c's footprint
