@@ -23,6 +23,12 @@ struct StrongShockParams {
   double h_over_dx = 2.0;
   double N_min = 9.5, N_max = 308.0, dN_max = 0.4;
   std::uint64_t max_steps = 128;
+  // RSPH on levels 0..levels (0: the uniform lattice above); nx and ny count cells of the finest level
+  int levels = 0;
+  int block_cells = 2;          ///< level-0 cells per block and axis
+  double refine_above = 0.1;    ///< relative density jump between level-0 cells that refines a block
+  double coarsen_below = 0.03;  ///< ... and below which it returns to level 0
+  double h_ramp = 2.0;          ///< coarser spacings over which h rises towards a coarser block
   // plain SPH: the paper's counts, 800 x 32 left and 100 x 4 right, h = eta (m / rho)^(1/2)
   int sph_nx_left = 800, sph_ny_left = 32, sph_nx_right = 100, sph_ny_right = 4;
   double eta = 1.2;
@@ -37,6 +43,11 @@ struct StrongShockParams {
             "strong shock: the SPH blocks must tile the same strip width (ny/nx equal left and right)");
     require(t_end > 0.0, "strong shock: t_end must be positive");
     require(gamma > 1.0, "strong shock: gamma must exceed 1");
+    require(levels >= 0 && levels <= 6, "strong shock: --levels must lie in [0, 6]");
+    require(block_cells >= 1, "strong shock: --block-cells must be at least 1");
+    const int fine_per_block = (1 << levels) * block_cells;
+    require(levels == 0 || (nx % fine_per_block == 0 && ny % fine_per_block == 0),
+            "strong shock: nx and ny must be multiples of 2^levels * block_cells = " + std::to_string(fine_per_block));
   }
   double strip_width_rsph() const { return double(ny) / nx; }
   double strip_width_sph() const { return 0.5 * sph_ny_left / sph_nx_left; }
@@ -150,6 +161,45 @@ inline RsphShock make_rsph_shock(const StrongShockParams& s) {
                                     schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
                                     regularize::RemapParams{s.h_over_dx}),
                    ts, physics::ArtificialViscosity{s.alpha, s.beta});
+}
+
+/// RSPH on levels in factors of two (the paper's variable, time-dependent resolution), the density-jump
+/// criterion choosing the levels at every regularization, with consistent gradients at the level faces.
+using ShockLevels = lattice::MultiLevel<2, refine::DensityJump>;
+using LevelShockRegularizer = regularize::LatticeRegularizer<ShockLevels, schedule::Adaptive<kernel::CubicSpline, 2>>;
+using RsphLevelShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, LevelShockRegularizer,
+                                  physics::ArtificialViscosity, physics::ConsistentGradient>;
+
+/// The tube on the finest lattice, then one remap onto the level lattice: the membrane on the finest
+/// level, the uniform states on level 0; rho = m / V, as the continuity equation takes it.
+inline RsphLevelShock make_rsph_levels_shock(const StrongShockParams& s) {
+  s.validate();
+  require(s.levels > 0, "strong shock: the level lattice needs --levels >= 1");
+  const eos::IdealGas gas{s.gamma};
+  const double dx = 1.0 / s.nx;
+  ParticleSet<2, true> p;
+  for (int j = 0; j < s.ny; ++j)
+    for (int i = 0; i < s.nx; ++i) {
+      const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
+      const auto& q = x[0] < 0.5 ? s.left : s.right;
+      p.add(q.rho * dx * dx, x, Vec<2>(q.v, 0.0), s.h_over_dx * dx, gas.internal_energy(q.rho, q.P));
+    }
+  Box<2> box;
+  box.hi = Vec<2>(1.0, s.strip_width_rsph());
+  box.edge = {Edge::reflecting, Edge::periodic};
+  ShockLevels ml(dx * (1 << s.levels), s.levels, s.block_cells,
+                 refine::DensityJump{s.refine_above, s.coarsen_below, s.levels});
+  ml.h_ramp = s.h_ramp;
+  const regularize::RemapParams remap{s.h_over_dx};
+  geometry::LocalVoronoi builder;
+  regularize::remap_onto_lattice(p, box, ml, builder, remap);
+  TimeStepParams ts;
+  ts.courant = s.courant;
+  return RsphLevelShock(
+      std::move(p), box, gas,
+      LevelShockRegularizer(std::move(ml),
+                            schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps}, remap),
+      ts, physics::ArtificialViscosity{s.alpha, s.beta}, physics::ConsistentGradient{});
 }
 
 inline SphShock make_sph_shock(const StrongShockParams& s) {

@@ -47,3 +47,41 @@ TEST_CASE("strong shock: plain SPH with alpha = 1 runs, conserves energy, and it
   CHECK(std::abs(r.shock_position - r.shock_position_exact) < 0.05);
   CHECK(r.penetration >= 0.0);
 }
+
+TEST_CASE("strong shock on levels in factors of two: fewer particles, shock in place, no penetration",
+          "[strong_shock][multilevel]") {
+  // finest lattice 512 x 8 on levels 0-2, against uniform lattices at the finest spacing and at twice it
+  scenes::StrongShockParams s;
+  s.nx = 512;
+  s.ny = 8;
+  s.levels = 2;
+  s.refine_above = 0.03;
+  s.coarsen_below = 0.01;
+  const auto levels = scenes::run_shock(
+      scenes::make_rsph_levels_shock(s), s, [](const auto&) {}, [](const auto&) {});
+  auto uniform_run = [](int nx, int ny) {
+    scenes::StrongShockParams u;
+    u.nx = nx;
+    u.ny = ny;
+    return scenes::run_shock(
+        scenes::make_rsph_shock(u), u, [](const auto&) {}, [](const auto&) {});
+  };
+  const auto fine = uniform_run(512, 8), coarse = uniform_run(256, 4);  // both 1/64 wide
+  INFO("levels 0-2: " << levels.mean_particles << " particles on average, L1(rho) " << levels.errors.L1_rho
+                      << ", shock " << levels.shock_position << " vs " << levels.shock_position_exact
+                      << ", energy error " << levels.energy_error << ", " << levels.regularizations
+                      << " regularizations");
+  INFO("uniform 512: " << fine.mean_particles << " particles, L1(rho) " << fine.errors.L1_rho);
+  INFO("uniform 256: " << coarse.mean_particles << " particles, L1(rho) " << coarse.errors.L1_rho);
+  check_physical(levels);
+  CHECK(levels.energy_error < 1e-6);
+  CHECK(std::abs(levels.shock_position - levels.shock_position_exact) < 0.01);
+  CHECK(levels.penetration == 0.0);
+  CHECK(levels.regularizations >= 2);
+  // a third of the finest lattice's particles for 1.35x its error; more accurate than the uniform
+  // lattice of about as many particles
+  CHECK(levels.mean_particles < 0.4 * fine.mean_particles);
+  CHECK(levels.errors.L1_rho < 1.5 * fine.errors.L1_rho);
+  CHECK(levels.mean_particles < 1.5 * coarse.mean_particles);
+  CHECK(levels.errors.L1_rho < 0.85 * coarse.errors.L1_rho);
+}
