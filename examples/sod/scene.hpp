@@ -1,6 +1,7 @@
 #pragma once
 // Sod's shock tube (Sod 1978): (rho, v, P) = (1, 0, 1) left of x = 0.5 and (0.125, 0, 0.1) right,
 // gamma = 1.4, in 1D or in 2D as a strip periodic in y; reflecting walls at x = 0 and x = 1.
+#include "common/levels.hpp"
 #include "rsph/rsph.hpp"
 
 #include <cmath>
@@ -143,13 +144,9 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Extra...> make_rsph_sod(
       v[0] = state.v;
       p.add(state.rho * std::pow(dx, D), x, v, s.h_over_dx * dx, gas.internal_energy(state.rho, state.P));
     }
-  const double dx0 = dx * static_cast<double>(std::int64_t{1} << r.levels);
-  lattice::MultiLevel<D, refine::DensityJump> ml(dx0, r.levels, r.block_cells,
-                                                 refine::DensityJump{r.refine_above, r.coarsen_below, r.levels});
-  ml.h_ramp = r.h_ramp;
   const regularize::RemapParams remap{s.h_over_dx};
-  geometry::LocalVoronoi builder;
-  regularize::remap_onto_lattice(p, box, ml, builder, remap);
+  auto ml = examples::start_on_levels(p, box, dx, {r.levels, r.block_cells, r.refine_above, r.coarsen_below, r.h_ramp},
+                                      remap);
   TimeStepParams ts;
   ts.courant = s.courant;
   ts.max_bin = r.max_bin;

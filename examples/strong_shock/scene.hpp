@@ -2,6 +2,7 @@
 // §3.2 of the paper: the Xiao (2004) shock tube, pressure ratio 1e10, t = 2.5e-6, in 2D as a strip
 // periodic in y with walls at x = 0 and 1. RSPH (h/Delta = 2, adaptive regularization of Appendix A)
 // against plain SPH (grad-h, Monaghan-Gingold viscosity).
+#include "common/levels.hpp"
 #include "rsph/rsph.hpp"
 
 #include <algorithm>
@@ -187,12 +188,9 @@ inline RsphLevelShock make_rsph_levels_shock(const StrongShockParams& s) {
   Box<2> box;
   box.hi = Vec<2>(1.0, s.strip_width_rsph());
   box.edge = {Edge::reflecting, Edge::periodic};
-  ShockLevels ml(dx * (1 << s.levels), s.levels, s.block_cells,
-                 refine::DensityJump{s.refine_above, s.coarsen_below, s.levels});
-  ml.h_ramp = s.h_ramp;
   const regularize::RemapParams remap{s.h_over_dx};
-  geometry::LocalVoronoi builder;
-  regularize::remap_onto_lattice(p, box, ml, builder, remap);
+  auto ml = examples::start_on_levels(p, box, dx, {s.levels, s.block_cells, s.refine_above, s.coarsen_below, s.h_ramp},
+                                      remap);
   TimeStepParams ts;
   ts.courant = s.courant;
   return RsphLevelShock(
