@@ -57,12 +57,10 @@ struct RsphSodRun {
   int worst_level_step;
 };
 template <int D, class... Extra>
-RsphSodRun<D> run_rsph_sod(int n_left, int levels, Extra... extra) {
+RsphSodRun<D> run_rsph_sod(int n_left, scenes::RsphSodParams r, Extra... extra) {
   scenes::SodParams s;
   s.n_left = n_left;
   s.ny_left = 8;
-  scenes::RsphSodParams r;
-  r.levels = levels;
   auto sim = scenes::make_rsph_sod<D, kernel::CubicSpline>(s, r, extra...);
   const auto start = sim.totals();
   double particle_steps = 0.0;
@@ -87,6 +85,12 @@ RsphSodRun<D> run_rsph_sod(int n_left, int levels, Extra... extra) {
           std::abs(end.total_energy() - start.total_energy()) / start.total_energy(),
           particle_steps / static_cast<double>(sim.steps()), worst};
 }
+template <int D, class... Extra>
+RsphSodRun<D> run_rsph_sod(int n_left, int levels, Extra... extra) {
+  scenes::RsphSodParams r;
+  r.levels = levels;
+  return run_rsph_sod<D>(n_left, r, extra...);
+}
 }  // namespace
 
 TEST_CASE("RSPH Sod 1D on a uniform lattice and on a three-level lattice", "[sod][multilevel]") {
@@ -108,7 +112,12 @@ TEST_CASE("RSPH Sod 1D on a uniform lattice and on a three-level lattice", "[sod
 
 TEST_CASE("RSPH Sod with consistent gradients: refined runs as accurate as the uniform finest lattice",
           "[sod][multilevel]") {
-  // levels 0-2 against the uniform finest lattice, both with and without the correction
+  // levels 0-2 refined where neighbouring level-0 cells differ by 3 % (back below 1 %), against the uniform
+  // finest lattice, both with and without the correction
+  scenes::RsphSodParams refine;
+  refine.levels = 2;
+  refine.refine_above = 0.03;
+  refine.coarsen_below = 0.01;
   auto compare = [](auto uniform, auto uniform_cg, auto refined, auto refined_cg) {
     INFO("uniform: L1(rho) " << uniform.errors.L1_rho << ", " << uniform.mean_particles << " particles");
     INFO("uniform, consistent gradients: L1(rho) " << uniform_cg.errors.L1_rho << ", " << uniform_cg.mean_particles);
@@ -117,18 +126,18 @@ TEST_CASE("RSPH Sod with consistent gradients: refined runs as accurate as the u
     CHECK(refined_cg.mass_drift < 1e-13);
     CHECK(refined_cg.energy_drift < 1e-5);
     CHECK(refined_cg.worst_level_step <= 1);
-    CHECK(refined_cg.mean_particles < 0.45 * uniform.mean_particles);
-    // within 5 % of the better uniform run, with less than half the particles
-    CHECK(refined_cg.errors.L1_rho < 1.05 * std::min(uniform.errors.L1_rho, uniform_cg.errors.L1_rho));
-    CHECK(refined_cg.errors.L1_rho < 0.5 * refined.errors.L1_rho);
+    CHECK(refined_cg.mean_particles < 0.5 * uniform.mean_particles);
+    // as accurate as the better uniform run to a few percent (1D: better than both; 2D: 3 % short)
+    CHECK(refined_cg.errors.L1_rho < 1.04 * std::min(uniform.errors.L1_rho, uniform_cg.errors.L1_rho));
+    CHECK(refined_cg.errors.L1_rho < 0.7 * refined.errors.L1_rho);
   };
   SECTION("1D, n_left 200") {
-    compare(run_rsph_sod<1>(200, 0), run_rsph_sod<1>(200, 0, physics::ConsistentGradient{}), run_rsph_sod<1>(200, 2),
-            run_rsph_sod<1>(200, 2, physics::ConsistentGradient{}));
+    compare(run_rsph_sod<1>(200, 0), run_rsph_sod<1>(200, 0, physics::ConsistentGradient{}),
+            run_rsph_sod<1>(200, refine), run_rsph_sod<1>(200, refine, physics::ConsistentGradient{}));
   }
   SECTION("2D strip, n_left 100") {
-    compare(run_rsph_sod<2>(100, 0), run_rsph_sod<2>(100, 0, physics::ConsistentGradient{}), run_rsph_sod<2>(100, 2),
-            run_rsph_sod<2>(100, 2, physics::ConsistentGradient{}));
+    compare(run_rsph_sod<2>(100, 0), run_rsph_sod<2>(100, 0, physics::ConsistentGradient{}),
+            run_rsph_sod<2>(100, refine), run_rsph_sod<2>(100, refine, physics::ConsistentGradient{}));
   }
 }
 
