@@ -201,6 +201,37 @@ TEST_CASE("1D multi-level remap conserves and lays levels out in factors of two"
   for (std::size_t a = 1; a < p.n_real; ++a) REQUIRE(p.x[a][0] > p.x[a - 1][0]);  // lattice order
 }
 
+TEST_CASE("1D: a set on three levels remaps onto itself; face cells are the intervals between midpoints",
+          "[regularize][multilevel]") {
+  ParticleSet<1, true> p;
+  const int n = 200;
+  for (int i = 0; i < n; ++i) p.add(1.0 / n, Vec<1>((i + 0.5) / n), Vec<1>::Zero(), 1.2 / n, 1.0);
+  Box<1> box;
+  box.edge = {Edge::periodic};
+  auto middle = refine::region<1>([](const Vec<1>& lo, const Vec<1>& hi) { return lo[0] < 0.6 && hi[0] > 0.4; }, 2);
+  lattice::MultiLevel<1, decltype(middle)> ml{1.0 / 50, 2, 5, middle};
+  conserving_remap(p, box, ml, RemapParams{2.0});
+  // a uniform state: rho = 1 everywhere, masses equal to the Voronoi intervals
+  for (std::size_t a = 0; a < p.n_real; ++a) CHECK(p.rho[a] == Approx(1.0).epsilon(1e-12));
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    p.v[a] = Vec<1>(U(rng));
+    p.u[a] = 1.0 + 0.5 * U(rng);
+  }
+  const auto before = p;
+  conserving_remap(p, box, ml, RemapParams{2.0});
+  REQUIRE(p.n_real == before.n_real);
+  double worst = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    worst = std::max(worst, std::abs(p.x[a][0] - before.x[a][0]) * n);
+    worst = std::max(worst, std::abs(p.m[a] - before.m[a]) / before.m[a]);
+    worst = std::max(worst, std::abs(p.v[a][0] - before.v[a][0]));
+    worst = std::max(worst, std::abs(p.u[a] - before.u[a]));
+  }
+  CHECK(worst < 1e-10);
+}
+
 namespace {
 
 struct TwoLevelRun {
