@@ -25,8 +25,10 @@ struct ConsistentGradient {
   static constexpr bool corrects_gradient = true;
   double tolerance = 1e-12;   ///< relative residual of the psi solve
   int max_iterations = 5000;  ///< per axis and solve
-  bool every_step = true;     ///< re-solve psi at every force pass (warm-started), not only after a remap
-  int band_layers = 2;        ///< neighbour layers added around the particles that see another h
+  /// Re-solve psi at every force pass (warm-started). false: only after a remap, cheaper, for flows that
+  /// barely move between regularizations (a stale psi broke Sod's rarefaction within ten steps).
+  bool every_step = true;
+  int band_layers = 2;  ///< neighbour layers added around the particles that see another h
 
   void validate() const {
     require(tolerance > 0.0 && tolerance < 1.0,
