@@ -26,7 +26,7 @@ struct ConsistentGradient {
   double tolerance = 1e-12;   ///< relative residual of the psi solve
   int max_iterations = 5000;  ///< per axis and solve
   /// Re-solve psi at every force pass (warm-started). false: only after a remap, cheaper, for flows that
-  /// barely move between regularizations (a stale psi broke Sod's rarefaction within ten steps).
+  /// barely move between regularizations (solved over the whole domain, a stale psi broke Sod within ten steps).
   bool every_step = true;
   int band_layers = 2;  ///< neighbour layers added around the particles that see another h
 
