@@ -132,7 +132,8 @@ def main():
                 a.axhline(1.0, color="k", lw=0.8, ls=":")
             else:
                 a.set_yscale("log")
-            a.legend(fontsize=7)
+            if a.get_legend_handles_labels()[0]:
+                a.legend(fontsize=7)
     fig.suptitle(f"Viscous ring: effective viscosity (Fig. 10) and noise (Fig. 11), h = {h0:g} in the top rows")
     save_figure(fig, os.path.join(args.out, "fig10_fig11_nu_eff_noise.png"), dpi=120)
 
@@ -153,7 +154,8 @@ def main():
         ax.set_xlim(0.2, 1.8)
         ax.set_xlabel("R / $R_0$")
         ax.set_ylabel(r"$\Sigma$")
-        ax.legend(fontsize=7)
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(fontsize=7)
     fig.suptitle(r"Profiles at the second snapshot: mean, min-max band, fit (dash-dot), analytic (dashed)")
     save_figure(fig, os.path.join(args.out, "fig7_9_profiles.png"), dpi=120)
 
