@@ -1,5 +1,6 @@
 #pragma once
 // What every example shares: the common flags, the output folder, error reporting and exit codes.
+#include "common/levels.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/io/atomic_file.hpp"
 
@@ -37,6 +38,21 @@ inline void add_common_options(po::options_description& desc, CommonOptions& com
       "quick: a small run in seconds; paper: the full setup")("threads", po::value(&common.threads)->default_value(0),
                                                               "OpenMP threads (0: all cores)")(
       "quiet", po::bool_switch(&common.quiet), "no progress line");
+}
+
+/// --levels, --block-cells, --refine-above, --coarsen-below and --h-ramp, defaulting to c's values; `who`
+/// starts each help line, `levels_help` says what --levels means in the scene.
+inline void add_level_options(po::options_description& desc, DensityJumpLevels& c, const std::string& who,
+                              const std::string& levels_help) {
+  desc.add_options()("levels", po::value(&c.levels)->default_value(c.levels), (who + ": " + levels_help).c_str())(
+      "block-cells", po::value(&c.block_cells)->default_value(c.block_cells),
+      (who + ": level-0 cells per block").c_str())(
+      "refine-above", po::value(&c.refine_above)->default_value(c.refine_above),
+      (who + ": relative density jump between level-0 cells that refines a block").c_str())(
+      "coarsen-below", po::value(&c.coarsen_below)->default_value(c.coarsen_below),
+      (who + ": jump below which a block returns to level 0").c_str())(
+      "h-ramp", po::value(&c.h_ramp)->default_value(c.h_ramp),
+      (who + ": coarser spacings over which h rises towards a coarser block (0: h jumps)").c_str());
 }
 
 /// Parses argv; returns false when --help was shown. Unknown flags throw with their name.

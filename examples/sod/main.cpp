@@ -91,7 +91,7 @@ int run(const Options& opt, Sim sim) {
   if constexpr (requires { sim.regularizer().log(); }) {
     summary.set("regularizations", sim.regularizations());
     summary.set("levels", ex::level_counts(sim.regularizer().log(), sim.steps()));
-    summary.set("max_level", opt.rsph.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
+    summary.set("max_level", opt.rsph.refinement.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
   }
   if constexpr (requires { sim.gradient_solves(); }) {
     summary.set("gradient_solves", sim.gradient_solves());
@@ -143,22 +143,15 @@ int main(int argc, char** argv) {
         "snapshots", ex::po::value(&opt.snapshots)->default_value(5), "HDF5 snapshots after the initial one")(
         "method", ex::po::value(&opt.method)->default_value("sph"),
         "sph: equal masses, grad-h; rsph: lattice regularization, levels in factors of two")(
-        "levels", ex::po::value(&opt.rsph.levels)->default_value(2),
-        "rsph: finest level L (0: uniform); the finest spacing is 0.5 / n-left")(
-        "block-cells", ex::po::value(&opt.rsph.block_cells)->default_value(2), "rsph: level-0 cells per block")(
         "cycle", ex::po::value(&opt.rsph.cycle)->default_value(10), "rsph: steps between regularizations")(
-        "refine-above", ex::po::value(&opt.rsph.refine_above)->default_value(0.1),
-        "rsph: relative density jump between level-0 cells that refines a block")(
-        "coarsen-below", ex::po::value(&opt.rsph.coarsen_below)->default_value(0.03),
-        "rsph: jump below which a block returns to level 0")(
         "consistent-gradient", ex::po::bool_switch(&opt.consistent_gradient),
         "rsph: continuity density and pair gradients corrected so that level faces keep uniform states exact")(
         "gradient-tolerance", ex::po::value(&opt.gradient.tolerance)->default_value(1e-12),
         "rsph: relative residual of the consistent-gradient solve")(
         "max-bin", ex::po::value(&opt.rsph.max_bin)->default_value(0),
-        "rsph: individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: global)")(
-        "h-ramp", ex::po::value(&opt.rsph.h_ramp)->default_value(2.0),
-        "rsph: coarser spacings over which h rises towards a coarser block (0: h jumps)");
+        "rsph: individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: global)");
+    ex::add_level_options(desc, opt.rsph.refinement, "rsph",
+                          "finest level L (0: uniform); the finest spacing is 0.5 / n-left");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-sod: Sod's shock tube, plain SPH or RSPH, against the exact solution.\n"

@@ -83,16 +83,11 @@ requires(D == 1 || D == 2) SodSimulation<D, Kernel> make_sod(const SodParams& s)
 /// finest spacing is the SPH run's left spacing 0.5 / n_left, so a uniform run and a refined one
 /// share the finest resolution.
 struct RsphSodParams {
-  int levels = 2;               ///< finest level L; the level-0 spacing is 2^L times the finest
-  int block_cells = 2;          ///< level-0 cells per block and axis
-  std::uint64_t cycle = 10;     ///< regularize every `cycle` steps
-  double refine_above = 0.1;    ///< relative density jump between level-0 cells that refines a block
-  double coarsen_below = 0.03;  ///< ... and the jump below which it returns to level 0
-  double h_ramp = 2.0;          ///< coarser spacings over which h rises towards a coarser block
-  int max_bin = 0;              ///< individual time steps down to 2^-max_bin of the longest (0: global)
+  examples::DensityJumpLevels refinement{.levels = 2};  ///< the level-0 spacing is 2^levels times the finest
+  std::uint64_t cycle = 10;                             ///< regularize every `cycle` steps
+  int max_bin = 0;  ///< individual time steps down to 2^-max_bin of the longest (0: global)
   void validate() const {
-    require(levels >= 0 && levels <= 8, "Sod RSPH: --levels must lie in [0, 8]");
-    require(block_cells >= 1, "Sod RSPH: --block-cells must be at least 1");
+    refinement.validate("Sod RSPH", 8);
     require(cycle >= 1, "Sod RSPH: --cycle must be at least 1");
   }
 };
@@ -116,7 +111,7 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Extra...> make_rsph_sod(
   const eos::IdealGas gas{s.gamma};
   gas.validate();
   const double dx = 0.5 / s.n_left;
-  const std::int64_t fine_per_block = (std::int64_t{1} << r.levels) * r.block_cells;
+  const std::int64_t fine_per_block = r.refinement.fine_cells_per_block();
   const double block = dx * static_cast<double>(fine_per_block);
   require(std::abs(1.0 / block - std::round(1.0 / block)) < 1e-9,
           "Sod RSPH: the tube length must be a whole number of blocks (2 n_left = " + std::to_string(2 * s.n_left) +
@@ -145,8 +140,7 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Extra...> make_rsph_sod(
       p.add(state.rho * std::pow(dx, D), x, v, s.h_over_dx * dx, gas.internal_energy(state.rho, state.P));
     }
   const regularize::RemapParams remap{s.h_over_dx};
-  auto ml = examples::start_on_levels(p, box, dx, {r.levels, r.block_cells, r.refine_above, r.coarsen_below, r.h_ramp},
-                                      remap);
+  auto ml = examples::start_on_levels(p, box, dx, r.refinement, remap);
   TimeStepParams ts;
   ts.courant = s.courant;
   ts.max_bin = r.max_bin;

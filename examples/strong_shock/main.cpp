@@ -26,15 +26,6 @@ int main(int argc, char** argv) {
         "ny", ex::po::value(&s.ny)->default_value(8), "RSPH: lattice rows across the strip")(
         "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(2.0), "RSPH: h / Delta")(
         "max-steps", ex::po::value(&s.max_steps)->default_value(128), "RSPH: most steps between regularizations")(
-        "levels", ex::po::value(&s.levels)->default_value(0),
-        "RSPH: finest level of a lattice in factors of two (0: uniform); nx, ny count finest cells")(
-        "block-cells", ex::po::value(&s.block_cells)->default_value(2), "RSPH levels: level-0 cells per block")(
-        "refine-above", ex::po::value(&s.refine_above)->default_value(0.1),
-        "RSPH levels: density jump between level-0 cells that refines")(
-        "coarsen-below", ex::po::value(&s.coarsen_below)->default_value(0.03),
-        "RSPH levels: density jump below which a block returns to level 0")(
-        "h-ramp", ex::po::value(&s.h_ramp)->default_value(2.0),
-        "RSPH levels: coarser spacings over which h rises at a level face (0: h jumps)")(
         "sph-left", ex::po::value(&s.sph_nx_left)->default_value(800), "SPH: particles along x, left half")(
         "sph-left-rows", ex::po::value(&s.sph_ny_left)->default_value(32), "SPH: rows, left half")(
         "sph-right", ex::po::value(&s.sph_nx_right)->default_value(100), "SPH: particles along x, right half")(
@@ -42,6 +33,8 @@ int main(int argc, char** argv) {
         "eta", ex::po::value(&s.eta)->default_value(1.2), "SPH: h = eta (m / rho)^(1/2)")(
         "t-end", ex::po::value(&s.t_end)->default_value(2.5e-6), "end time")(
         "courant", ex::po::value(&s.courant)->default_value(0.2), "Courant factor");
+    ex::add_level_options(desc, s.refinement, "RSPH",
+                          "finest level of a lattice in factors of two (0: uniform); nx, ny count finest cells");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-strong-shock: (rho, v, P) = (1, 0, 1e10) | (0.125, 0, 0.1), gamma = 1.4, t = 2.5e-6.\n"
@@ -69,7 +62,7 @@ int main(int argc, char** argv) {
         levels = ex::level_counts(sim.regularizer().log(), sim.steps());
     };
     scenes::ShockRun r;
-    if (method == "rsph" && s.levels > 0)
+    if (method == "rsph" && s.refinement.levels > 0)
       r = scenes::run_shock(scenes::make_rsph_levels_shock(s), s, on_step, on_end);
     else if (method == "rsph")
       r = scenes::run_shock(scenes::make_rsph_shock(s), s, on_step, on_end);
@@ -99,7 +92,8 @@ int main(int argc, char** argv) {
     summary.set("energy_error", r.energy_error).set("wall_seconds", r.wall_seconds).set("steps", r.steps);
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
     summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
-    if (method == "rsph") summary.set("max_level", static_cast<std::uint64_t>(s.levels)).set("levels", levels);
+    if (method == "rsph")
+      summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels)).set("levels", levels);
     summary.write(dir / "summary.json");
     fmt::print(
         "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"

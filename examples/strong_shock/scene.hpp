@@ -25,11 +25,7 @@ struct StrongShockParams {
   double N_min = 9.5, N_max = 308.0, dN_max = 0.4;
   std::uint64_t max_steps = 128;
   // RSPH on levels 0..levels (0: the uniform lattice above); nx and ny count cells of the finest level
-  int levels = 0;
-  int block_cells = 2;          ///< level-0 cells per block and axis
-  double refine_above = 0.1;    ///< relative density jump between level-0 cells that refines a block
-  double coarsen_below = 0.03;  ///< ... and below which it returns to level 0
-  double h_ramp = 2.0;          ///< coarser spacings over which h rises towards a coarser block
+  examples::DensityJumpLevels refinement;
   // plain SPH: the paper's counts, 800 x 32 left and 100 x 4 right, h = eta (m / rho)^(1/2)
   int sph_nx_left = 800, sph_ny_left = 32, sph_nx_right = 100, sph_ny_right = 4;
   double eta = 1.2;
@@ -44,10 +40,9 @@ struct StrongShockParams {
             "strong shock: the SPH blocks must tile the same strip width (ny/nx equal left and right)");
     require(t_end > 0.0, "strong shock: t_end must be positive");
     require(gamma > 1.0, "strong shock: gamma must exceed 1");
-    require(levels >= 0 && levels <= 6, "strong shock: --levels must lie in [0, 6]");
-    require(block_cells >= 1, "strong shock: --block-cells must be at least 1");
-    const int fine_per_block = (1 << levels) * block_cells;
-    require(levels == 0 || (nx % fine_per_block == 0 && ny % fine_per_block == 0),
+    refinement.validate("strong shock", 6);
+    const auto fine_per_block = refinement.fine_cells_per_block();
+    require(refinement.levels == 0 || (nx % fine_per_block == 0 && ny % fine_per_block == 0),
             "strong shock: nx and ny must be multiples of 2^levels * block_cells = " + std::to_string(fine_per_block));
   }
   double strip_width_rsph() const { return double(ny) / nx; }
@@ -175,7 +170,7 @@ using RsphLevelShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, LevelSh
 /// level, the uniform states on level 0; rho = m / V, as the continuity equation takes it.
 inline RsphLevelShock make_rsph_levels_shock(const StrongShockParams& s) {
   s.validate();
-  require(s.levels > 0, "strong shock: the level lattice needs --levels >= 1");
+  require(s.refinement.levels > 0, "strong shock: the level lattice needs --levels >= 1");
   const eos::IdealGas gas{s.gamma};
   const double dx = 1.0 / s.nx;
   ParticleSet<2, true> p;
@@ -189,8 +184,7 @@ inline RsphLevelShock make_rsph_levels_shock(const StrongShockParams& s) {
   box.hi = Vec<2>(1.0, s.strip_width_rsph());
   box.edge = {Edge::reflecting, Edge::periodic};
   const regularize::RemapParams remap{s.h_over_dx};
-  auto ml = examples::start_on_levels(p, box, dx, {s.levels, s.block_cells, s.refine_above, s.coarsen_below, s.h_ramp},
-                                      remap);
+  auto ml = examples::start_on_levels(p, box, dx, s.refinement, remap);
   TimeStepParams ts;
   ts.courant = s.courant;
   return RsphLevelShock(

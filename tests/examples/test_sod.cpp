@@ -88,7 +88,7 @@ RsphSodRun<D> run_rsph_sod(int n_left, scenes::RsphSodParams r, Extra... extra) 
 template <int D, class... Extra>
 RsphSodRun<D> run_rsph_sod(int n_left, int levels, Extra... extra) {
   scenes::RsphSodParams r;
-  r.levels = levels;
+  r.refinement.levels = levels;
   return run_rsph_sod<D>(n_left, r, extra...);
 }
 }  // namespace
@@ -115,9 +115,9 @@ TEST_CASE("RSPH Sod with consistent gradients: refined runs as accurate as the u
   // levels 0-2 refined where neighbouring level-0 cells differ by 3 % (back below 1 %), against the uniform
   // finest lattice, both with and without the correction
   scenes::RsphSodParams refine;
-  refine.levels = 2;
-  refine.refine_above = 0.03;
-  refine.coarsen_below = 0.01;
+  refine.refinement.levels = 2;
+  refine.refinement.refine_above = 0.03;
+  refine.refinement.coarsen_below = 0.01;
   auto compare = [](auto uniform, auto uniform_cg, auto refined, auto refined_cg) {
     INFO("uniform: L1(rho) " << uniform.errors.L1_rho << ", " << uniform.mean_particles << " particles");
     INFO("uniform, consistent gradients: L1(rho) " << uniform_cg.errors.L1_rho << ", " << uniform_cg.mean_particles);

@@ -54,9 +54,9 @@ TEST_CASE("strong shock on levels in factors of two: fewer particles, shock in p
   scenes::StrongShockParams s;
   s.nx = 512;
   s.ny = 8;
-  s.levels = 2;
-  s.refine_above = 0.03;
-  s.coarsen_below = 0.01;
+  s.refinement.levels = 2;
+  s.refinement.refine_above = 0.03;
+  s.refinement.coarsen_below = 0.01;
   const auto levels = scenes::run_shock(
       scenes::make_rsph_levels_shock(s), s, [](const auto&) {}, [](const auto&) {});
   auto uniform_run = [](int nx, int ny) {

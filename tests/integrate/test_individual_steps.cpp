@@ -72,7 +72,7 @@ TEST_CASE("individual time steps: RSPH Sod on three levels as accurate as with o
     scenes::SodParams s;
     s.n_left = 200;
     scenes::RsphSodParams r;
-    r.levels = 2;
+    r.refinement.levels = 2;
     r.max_bin = max_bin;
     auto sim = scenes::make_rsph_sod<1, K>(s, r);
     const double mass = sim.totals().mass;
