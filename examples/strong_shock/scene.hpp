@@ -62,11 +62,12 @@ struct ShockRun {
 
 namespace detail {
 
-/// Adds a block of lattice particles with masses such that the SPH density of the lattice is rho.
-template <class Kernel, class P>
+/// Adds a block of lattice particles of mass rho dx^2 / lattice_sum: the kernel's lattice sum makes the
+/// SPH density of the lattice rho, 1 makes m / V = rho.
+template <class P>
 void add_block(P& p, const analysis::GasState& s, const eos::IdealGas& gas, double x0, int nx, int ny, double dx,
-               double h_over_dx) {
-  const double m = s.rho * dx * dx / kernel::lattice_sum<Kernel, 2>(h_over_dx);
+               double h_over_dx, double lattice_sum) {
+  const double m = s.rho * dx * dx / lattice_sum;
   for (int j = 0; j < ny; ++j)
     for (int i = 0; i < nx; ++i)
       p.add(m, Vec<2>(x0 + (i + 0.5) * dx, (j + 0.5) * dx), Vec<2>(s.v, 0.0), h_over_dx * dx,
@@ -145,8 +146,9 @@ inline RsphShock make_rsph_shock(const StrongShockParams& s) {
   const eos::IdealGas gas{s.gamma};
   const double dx = 1.0 / s.nx;
   ParticleSet<2, true> p;
-  detail::add_block<kernel::CubicSpline>(p, s.left, gas, 0.0, s.nx / 2, s.ny, dx, s.h_over_dx);
-  detail::add_block<kernel::CubicSpline>(p, s.right, gas, 0.5, s.nx - s.nx / 2, s.ny, dx, s.h_over_dx);
+  const double sum = kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
+  detail::add_block(p, s.left, gas, 0.0, s.nx / 2, s.ny, dx, s.h_over_dx, sum);
+  detail::add_block(p, s.right, gas, 0.5, s.nx - s.nx / 2, s.ny, dx, s.h_over_dx, sum);
   Box<2> box;
   box.hi = Vec<2>(1.0, s.strip_width_rsph());
   box.edge = {Edge::reflecting, Edge::periodic};
@@ -174,12 +176,8 @@ inline RsphLevelShock make_rsph_levels_shock(const StrongShockParams& s) {
   const eos::IdealGas gas{s.gamma};
   const double dx = 1.0 / s.nx;
   ParticleSet<2, true> p;
-  for (int j = 0; j < s.ny; ++j)
-    for (int i = 0; i < s.nx; ++i) {
-      const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
-      const auto& q = x[0] < 0.5 ? s.left : s.right;
-      p.add(q.rho * dx * dx, x, Vec<2>(q.v, 0.0), s.h_over_dx * dx, gas.internal_energy(q.rho, q.P));
-    }
+  detail::add_block(p, s.left, gas, 0.0, s.nx / 2, s.ny, dx, s.h_over_dx, 1.0);
+  detail::add_block(p, s.right, gas, 0.5, s.nx - s.nx / 2, s.ny, dx, s.h_over_dx, 1.0);
   Box<2> box;
   box.hi = Vec<2>(1.0, s.strip_width_rsph());
   box.edge = {Edge::reflecting, Edge::periodic};
@@ -198,9 +196,9 @@ inline SphShock make_sph_shock(const StrongShockParams& s) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   ParticleSet<2, true> p;
-  detail::add_block<kernel::CubicSpline>(p, s.left, gas, 0.0, s.sph_nx_left, s.sph_ny_left, 0.5 / s.sph_nx_left, s.eta);
-  detail::add_block<kernel::CubicSpline>(p, s.right, gas, 0.5, s.sph_nx_right, s.sph_ny_right, 0.5 / s.sph_nx_right,
-                                         s.eta);
+  const double sum = kernel::lattice_sum<kernel::CubicSpline, 2>(s.eta);
+  detail::add_block(p, s.left, gas, 0.0, s.sph_nx_left, s.sph_ny_left, 0.5 / s.sph_nx_left, s.eta, sum);
+  detail::add_block(p, s.right, gas, 0.5, s.sph_nx_right, s.sph_ny_right, 0.5 / s.sph_nx_right, s.eta, sum);
   Box<2> box;
   box.hi = Vec<2>(1.0, s.strip_width_sph());
   box.edge = {Edge::reflecting, Edge::periodic};
