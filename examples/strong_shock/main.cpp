@@ -92,8 +92,8 @@ int main(int argc, char** argv) {
     summary.set("energy_error", r.energy_error).set("wall_seconds", r.wall_seconds).set("steps", r.steps);
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
     summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
-    if (method == "rsph")
-      summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels)).set("levels", levels);
+    if (method == "rsph") summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels));
+    if (method == "rsph" && s.refinement.levels > 0) summary.set("levels", levels);  // none on a uniform lattice
     summary.write(dir / "summary.json");
     fmt::print(
         "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"
