@@ -8,8 +8,9 @@
 // cell is ever unbounded.
 //
 // Two interchangeable builders:
-//  - LocalVoronoi cuts each cell out of its initial polygon by the bisectors of neighbours found ring by
-//    ring in a cell list, until the security radius (twice the farthest vertex distance) is passed.
+//  - LocalVoronoi cuts each cell out of its initial polygon by the bisectors of neighbours gathered from a
+//    cell list in discs of growing radius, until the security radius (twice the farthest vertex
+//    distance) lies inside the discs gathered.
 //    Exact in double precision; per particle, so it runs in parallel.
 //  - BoostVoronoi takes the Voronoi neighbours from Boost.Polygon's construct_voronoi on positions
 //    quantized to 31-bit integers (scale 2^30 over the extent of the points: quantization error at most
@@ -24,10 +25,10 @@
 #include <boost/polygon/voronoi.hpp>
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <exception>
 #include <limits>
 #include <string>
@@ -102,13 +103,25 @@ inline ConvexPolygon initial_cell(const Point& xa, const Box<2>& box, double mar
   return ConvexPolygon::rectangle(lo[0], lo[1], hi[0], hi[1]);
 }
 
-/// Cuts `in` (relative to x_a) by the half-plane normal . y <= offset into `out`. Returns false, leaving
-/// `out` alone, when no vertex lies beyond it: most candidates miss the cell, so test before clipping.
+/// Cuts `in` (relative to x_a) by the half-plane normal . y <= offset into `out` (Sutherland-Hodgman on
+/// distances computed once). Returns false, leaving `out` alone, when no vertex lies beyond it: most
+/// candidates miss the cell.
 inline bool cut_halfplane(const ConvexPolygon& in, const Point& normal, double offset, ConvexPolygon& out) {
+  std::array<double, ConvexPolygon::capacity> s;
   bool cuts = false;
-  for (int i = 0; i < in.n && !cuts; ++i) cuts = normal.dot(in[i]) > offset;
-  if (cuts) clip_halfplane(in, normal, offset, out);
-  return cuts;
+  for (int i = 0; i < in.n; ++i) {
+    s[static_cast<std::size_t>(i)] = normal.dot(in[i]) - offset;
+    cuts |= s[static_cast<std::size_t>(i)] > 0.0;
+  }
+  if (!cuts) return false;
+  out.clear();
+  for (int i = 0, j = in.n - 1; i < in.n; j = i++) {
+    const double si = s[static_cast<std::size_t>(i)], sj = s[static_cast<std::size_t>(j)];
+    if ((si > 0.0) != (sj > 0.0)) out.push(in[j] + (sj / (sj - si)) * (in[i] - in[j]));
+    if (si <= 0.0) out.push(in[i]);
+  }
+  if (out.n < 3) out.clear();
+  return true;
 }
 
 /// The bisector with a site at relative position d keeps |y| <= |y - d|, i.e. d . y <= |d|^2 / 2.
@@ -252,31 +265,32 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
     double d2;  ///< squared distance
     Point d;    ///< position relative to the cell's particle
   };
-  // Sorts by distance through keys that pack a distance's leading bits with the candidate's slot (the
-  // bits of a non-negative double order like the double): insertion sort on integers, since a ring holds
-  // a few dozen points. Ties cut in either order give the same cell.
-  static void sort_by_distance(std::vector<Candidate>& c, std::vector<std::uint64_t>& keys,
-                               std::vector<Candidate>& sorted) {
-    const std::size_t n = c.size();
-    if (n > 0xffff) {  // far more than any cell list block holds; the slots would not fit the keys
-      std::sort(c.begin(), c.end(), [](const Candidate& l, const Candidate& r) { return l.d2 < r.d2; });
-      return;
+  /// Radius of the first disc of candidates, in mean spacings: it holds the security disc of a regular
+  /// lattice's cell (2 x 0.71 spacings), so one gather settles a near-regular cell; each further disc is
+  /// `disc_growth` times wider (measured on jittered and sheared lattices against 1.8 / 2.0 and doubling).
+  static constexpr double first_radius_spacings = 1.5;
+  static constexpr double disc_growth = 1.4;
+
+  /// Cuts the cell by the bisectors of the candidates. Returns false when one coincides with the particle.
+  /// r2_max, the squared farthest vertex distance, is refreshed once at the end: cuts only shrink the cell,
+  /// so a stale value still bounds it and skips only what cannot cut.
+  static bool cut_by(const std::vector<Candidate>& candidates, ConvexPolygon*& cell, ConvexPolygon*& scratch,
+                     double& r2_max) {
+    bool cut = false;
+    for (const auto& [d2, d] : candidates) {
+      if (d2 == 0.0) {
+        cell->clear();
+        return false;
+      }
+      // a bisector farther than the farthest vertex cuts nothing (slack for the rounding of r2_max)
+      if (d2 > 4.0 * r2_max * (1.0 + 1e-9)) continue;
+      if (detail::cut_by_bisector(*cell, d, *scratch)) {
+        std::swap(cell, scratch);
+        cut = true;
+      }
     }
-    keys.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      std::uint64_t bits;
-      std::memcpy(&bits, &c[i].d2, sizeof bits);
-      keys[i] = (bits & ~std::uint64_t{0xffff}) | i;
-    }
-    for (std::size_t i = 1; i < n; ++i) {
-      const std::uint64_t key = keys[i];
-      std::size_t j = i;
-      for (; j > 0 && keys[j - 1] > key; --j) keys[j] = keys[j - 1];
-      keys[j] = key;
-    }
-    sorted.resize(n);
-    for (std::size_t i = 0; i < n; ++i) sorted[i] = c[keys[i] & 0xffff];
-    c.swap(sorted);
+    if (cut) r2_max = detail::max_radius2_origin(*cell);
+    return true;
   }
 
   template <class Visitor>
@@ -285,13 +299,12 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
     SitesWithImages& sites = sites_;
     detail::add_periodic_images(x, box, margin, sites);
     neighbors::CellList<2>& cells = cells_;
-    cells.build(sites.x, detail::mean_spacing(x, box) * 1.1);
-    const std::int64_t max_ring = cells.max_ring();
+    const double spacing = detail::mean_spacing(x, box);
+    cells.build(sites.x, spacing);
     std::atomic<bool> ok{true};
     detail::run_parallel(sites.n_real, [&](int thread, std::size_t begin, std::size_t end) {
       ConvexPolygon buffers[2];
-      std::vector<Candidate> ring_points, sorted_points;
-      std::vector<std::uint64_t> keys;
+      std::vector<Candidate> near, far;
       for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
         const Point xa = sites.x[a];
         const double closing = closing_radius.empty() ? 0.0 : closing_radius[a];
@@ -299,43 +312,28 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
         ConvexPolygon* scratch = &buffers[1];
         *cell = detail::initial_cell(xa, box, margin, closing);
         double r2_max = detail::max_radius2_origin(*cell);
-        // Cuts by the points of `ring_points`, nearest first: the result does not depend on the order (a
-        // cell is the intersection of half-planes), but the nearest points carve out most of the cell, and
-        // once one lies beyond twice the farthest vertex, all the rest do too.
-        auto cut_all = [&] {
-          sort_by_distance(ring_points, keys, sorted_points);
-          for (const auto& [d2, d] : ring_points) {
-            // the keys order distances to 2^-36 relative: stop only clearly beyond the security radius
-            if (d2 > 4.0 * r2_max * (1.0 + 1e-9)) return;
-            if (d2 == 0.0) {
-              cell->clear();
-              return;
-            }
-            if (detail::cut_by_bisector(*cell, d, *scratch)) {
-              std::swap(cell, scratch);
-              r2_max = detail::max_radius2_origin(*cell);
-            }
-          }
-        };
-        ring_points.clear();
-        cells.for_each_candidate(xa, [&](std::uint32_t b) {  // rings 0 and 1 at once
-          if (b == a) return;
-          const Point d = sites.x[b] - xa;
-          ring_points.push_back({d.squaredNorm(), d});
-        });
-        cut_all();
-        for (std::int64_t ring = 2; ring <= max_ring && !cell->empty(); ++ring) {
-          // stop once every unseen point lies beyond the security radius
-          if (cells.unseen_distance(xa, ring - 1) > 2.0 * std::sqrt(r2_max)) break;
-          ring_points.clear();
-          cells.for_each_in_ring(
-              xa, ring,
-              [&](std::uint32_t b) {
-                const Point d = sites.x[b] - xa;
-                if (const double d2 = d.squaredNorm(); d2 <= 4.0 * r2_max) ring_points.push_back({d2, d});
-              },
-              2.0 * std::sqrt(r2_max));  // only the part of the ring the security disc reaches
-          cut_all();
+        // Candidates come disc by disc (each wider disc adding its annulus) until the security
+        // disc, twice the farthest vertex distance, lies inside the discs seen: no point beyond can cut.
+        // Within a disc the nearer part goes first, sorted, as it carves out most of the cell; the rest
+        // is tested in any order (the cell is an intersection of half-planes, so order cannot change it).
+        double inner2 = -1.0;
+        for (double radius = first_radius_spacings * spacing;; radius *= disc_growth) {
+          const double outer2 = radius * radius;
+          const double near2 = 0.390625 * outer2;  // (5/8 of the radius)^2
+          near.clear();
+          far.clear();
+          cells.for_each_within_at(xa, radius, [&](std::uint32_t b, const Point& xb) {
+            if (b == a) return;
+            const Point d = xb - xa;
+            const double d2 = d.squaredNorm();
+            if (d2 <= inner2 || d2 > outer2) return;
+            (d2 <= near2 ? near : far).push_back({d2, d});
+          });
+          for (std::size_t i = 1; i < near.size(); ++i)  // a handful: insertion sort
+            for (std::size_t j = i; j > 0 && near[j - 1].d2 > near[j].d2; --j) std::swap(near[j - 1], near[j]);
+          if (!cut_by(near, cell, scratch, r2_max) || !cut_by(far, cell, scratch, r2_max)) break;
+          if (4.0 * r2_max <= outer2 || cells.covers(xa, radius)) break;
+          inner2 = outer2;
         }
         detail::check_coincident(*cell, a);
         detail::close_with_disc(cell, scratch, box, closing);

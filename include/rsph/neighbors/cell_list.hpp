@@ -58,18 +58,6 @@ class CellList {
     for (std::size_t k = 0; k < n; ++k) sorted_x_[k] = x[sorted_[k]];
   }
 
-  /// Calls f(j) for every point j in the 3^D cells around position p.
-  template <class F>
-  void for_each_candidate(const Vec<D>& p, F&& f) const {
-    const auto c = coords(p);
-    std::array<std::int64_t, D> lo, hi;
-    for (int k = 0; k < D; ++k) {
-      lo[k] = std::max<std::int64_t>(0, c[k] - 1);
-      hi[k] = std::min<std::int64_t>(dims_[k] - 1, c[k] + 1);
-    }
-    for_each_in_block(lo, hi, f);
-  }
-
   /// Calls f(j) for every point j in the cells that meet the square of half-width `radius` around p
   /// (a superset of the points closer than `radius`).
   template <class F>
@@ -98,62 +86,14 @@ class CellList {
     }
   }
 
-  /// Calls f(j) for every point j in the cells at Chebyshev distance exactly `ring` from p's cell that
-  /// meet the square of half-width `radius` around p (all of the ring by default).
-  /// Every point outside rings 0..k lies farther than k * cell_size() from p.
-  template <class F>
-  void for_each_in_ring(const Vec<D>& p, std::int64_t ring, F&& f,
-                        double radius = std::numeric_limits<double>::infinity()) const {
-    const auto c = coords(p);
-    std::array<std::int64_t, D> lo, hi, first, last;
-    for (int k = 0; k < D; ++k) {
-      lo[k] = c[k] - ring;
-      hi[k] = c[k] + ring;
-      first[k] = std::max<std::int64_t>(lo[k], 0);
-      last[k] = std::min(hi[k], dims_[k] - 1);
-      if (radius < std::numeric_limits<double>::infinity()) {
-        first[k] = std::max(first[k], static_cast<std::int64_t>(std::floor((p[k] - radius - lo_[k]) * inv_size_)));
-        last[k] = std::min(last[k], static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)));
-      }
-      if (first[k] > last[k]) return;
-    }
-    std::array<std::int64_t, D> idx = first;
-    for (;;) {
-      bool on_ring = false;
-      for (int k = 0; k < D; ++k) on_ring |= idx[k] == lo[k] || idx[k] == hi[k];
-      if (on_ring) {
-        const std::size_t cell = cell_index(idx);
-        for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s]);
-      }
-      int k = 0;
-      for (; k < D; ++k) {
-        if (++idx[k] <= last[k]) break;
-        idx[k] = first[k];
-      }
-      if (k == D) break;
-    }
+  /// Whether the square of half-width `radius` around p holds every cell, so for_each_within has seen
+  /// every point.
+  bool covers(const Vec<D>& p, double radius) const {
+    for (int k = 0; k < D; ++k)
+      if (p[k] - radius > lo_[k] || p[k] + radius < lo_[k] + static_cast<double>(dims_[k]) / inv_size_) return false;
+    return true;
   }
 
-  /// A lower bound on the distance from p to any point outside rings 0..ring around p's cell.
-  double unseen_distance(const Vec<D>& p, std::int64_t ring) const {
-    const auto c = coords(p);
-    const double size = cell_size();
-    double d = std::numeric_limits<double>::max();
-    for (int k = 0; k < D; ++k) {
-      const double cell_lo = lo_[k] + static_cast<double>(c[k] - ring) * size;
-      const double cell_hi = lo_[k] + static_cast<double>(c[k] + ring + 1) * size;
-      if (c[k] - ring > 0) d = std::min(d, p[k] - cell_lo);
-      if (c[k] + ring < dims_[k] - 1) d = std::min(d, cell_hi - p[k]);
-    }
-    return d;
-  }
-
-  /// Rings beyond this one hold no points.
-  std::int64_t max_ring() const {
-    std::int64_t m = 0;
-    for (int k = 0; k < D; ++k) m = std::max(m, dims_[k]);
-    return m;
-  }
   double cell_size() const { return 1.0 / inv_size_; }
 
   /// The points in cell order: iterating particles this way keeps neighbours close in memory.
