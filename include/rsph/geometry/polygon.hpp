@@ -85,24 +85,25 @@ inline double max_radius(const ConvexPolygon& p, const Point& c) {
   return std::sqrt(r2);
 }
 
-/// Keeps the part of `in` where normal . x <= offset (Sutherland-Hodgman, one edge).
-inline void clip_halfplane(const ConvexPolygon& in, const Point& normal, double offset, ConvexPolygon& out) {
+namespace detail {
+/// Sutherland-Hodgman for one edge: keeps the part of `in` where the signed distance beyond the edge,
+/// given per vertex in s, is <= 0.
+inline void clip_by_distances(const ConvexPolygon& in, const double* s, ConvexPolygon& out) {
   out.clear();
-  if (in.n == 0) return;
-  int j = in.n - 1;
-  double dj = normal.dot(in[j]) - offset;
-  for (int i = 0; i < in.n; ++i) {
-    const double di = normal.dot(in[i]) - offset;
-    if (di <= 0.0) {
-      if (dj > 0.0) out.push(in[j] + (dj / (dj - di)) * (in[i] - in[j]));
-      out.push(in[i]);
-    } else if (dj <= 0.0) {
-      out.push(in[j] + (dj / (dj - di)) * (in[i] - in[j]));
-    }
-    j = i;
-    dj = di;
+  for (int i = 0, j = in.n - 1; i < in.n; j = i++) {
+    const double si = s[i], sj = s[j];
+    if ((si > 0.0) != (sj > 0.0)) out.push(in[j] + (sj / (sj - si)) * (in[i] - in[j]));
+    if (si <= 0.0) out.push(in[i]);
   }
   if (out.n < 3) out.clear();
+}
+}  // namespace detail
+
+/// Keeps the part of `in` where normal . x <= offset (Sutherland-Hodgman, one edge).
+inline void clip_halfplane(const ConvexPolygon& in, const Point& normal, double offset, ConvexPolygon& out) {
+  std::array<double, ConvexPolygon::capacity> s;
+  for (int i = 0; i < in.n; ++i) s[static_cast<std::size_t>(i)] = normal.dot(in[i]) - offset;
+  detail::clip_by_distances(in, s.data(), out);
 }
 
 /// Clips to the half-plane in place.

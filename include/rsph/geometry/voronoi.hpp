@@ -113,15 +113,8 @@ inline bool cut_halfplane(const ConvexPolygon& in, const Point& normal, double o
     s[static_cast<std::size_t>(i)] = normal.dot(in[i]) - offset;
     cuts |= s[static_cast<std::size_t>(i)] > 0.0;
   }
-  if (!cuts) return false;
-  out.clear();
-  for (int i = 0, j = in.n - 1; i < in.n; j = i++) {
-    const double si = s[static_cast<std::size_t>(i)], sj = s[static_cast<std::size_t>(j)];
-    if ((si > 0.0) != (sj > 0.0)) out.push(in[j] + (sj / (sj - si)) * (in[i] - in[j]));
-    if (si <= 0.0) out.push(in[i]);
-  }
-  if (out.n < 3) out.clear();
-  return true;
+  if (cuts) clip_by_distances(in, s.data(), out);
+  return cuts;
 }
 
 /// The bisector with a site at relative position d keeps |y| <= |y - d|, i.e. d . y <= |d|^2 / 2.
