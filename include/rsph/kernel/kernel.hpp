@@ -18,12 +18,18 @@ constexpr double pow_dim(double h) {
 /// W(r, h) of eq. (2).
 template <class K, int D>
 requires SmoothingKernel<K, D>
-inline double W(double r, double h) { return K::template sigma<D>() / pow_dim<D>(h) * K::f(r / h); }
+inline double W(double r, double h) {
+  const double inv_h = 1.0 / h;  // one division: the pair loops are bound by their divisions
+  return K::template sigma<D>() * pow_dim<D>(inv_h) * K::f(r * inv_h);
+}
 
 /// dW/dr; the gradient is dW_dr * r_ab / |r_ab|.
 template <class K, int D>
 requires SmoothingKernel<K, D>
-inline double dW_dr(double r, double h) { return K::template sigma<D>() / (pow_dim<D>(h) * h) * K::df(r / h); }
+inline double dW_dr(double r, double h) {
+  const double inv_h = 1.0 / h;
+  return K::template sigma<D>() * (pow_dim<D>(inv_h) * inv_h) * K::df(r * inv_h);
+}
 
 /// nabla_a W_ab for r_ab = x_a - x_b, |r_ab| = r > 0.
 template <class K, int D>
