@@ -169,7 +169,10 @@ class Simulation {
     info_.step = step_;
     info_.time = time_;
     info_.neighbors = &nl_;
-    if constexpr (wants_number_density) info_.number_density = &number_density_;
+    if constexpr (wants_number_density) {
+      info_.number_density = &number_density_;
+      info_.pair_kernel = pair_kernel_full_ ? &pair_kernel_ : nullptr;
+    }
     const auto t0 = clock::now();
     const bool due = reg_.due(p_, box_, info_);  // an adaptive schedule's check is regularization cost too
     times_.regularization += seconds_since(t0);
@@ -188,6 +191,7 @@ class Simulation {
     auto t0 = clock::now();
     double dt_lo = std::numeric_limits<double>::infinity(), dt_hi = 0.0;
     dt_own_.assign(n, std::numeric_limits<double>::infinity());
+#pragma omp parallel for schedule(static) reduction(min : dt_lo) reduction(max : dt_hi)
     for (std::size_t a = 0; a < n; ++a) {
       if (p_.frozen[a]) continue;
       dt_own_[a] = particle_time_step(p_, v_sig_, params_, a);
@@ -215,9 +219,12 @@ class Simulation {
       throw NumericalError("time step " + std::to_string(delta) + " fell below the minimum " +
                            std::to_string(params_.dt_min) + " at t = " + std::to_string(time_));
     // Each particle's bin: the longest step 2^-k of the block within its own limit.
-    stride_.assign(n, n_sub);
-    for (std::size_t a = 0; a < n; ++a)
+    stride_.resize(n);
+#pragma omp parallel for schedule(static)
+    for (std::size_t a = 0; a < n; ++a) {
+      stride_[a] = n_sub;
       while (stride_[a] > 1 && delta * double(stride_[a]) > dt_own_[a]) stride_[a] >>= 1;
+    }
     v_half_.resize(n);
     if constexpr (has_energy) u_half_.resize(n);
     step_start_.assign(n, 0);
@@ -225,7 +232,8 @@ class Simulation {
     for (std::uint64_t sub = 0; sub < n_sub; ++sub) {
       t0 = clock::now();
       const bool sync = sub + 1 == n_sub;
-      active_.clear();
+      ends_now_.assign(n, 0);
+#pragma omp parallel for schedule(static)
       for (std::size_t a = 0; a < n; ++a) {
         if (p_.frozen[a]) continue;
         const double dt_a = delta * double(stride_[a]);
@@ -240,8 +248,11 @@ class Simulation {
         const double lead = double(sub + 1 - step_start_[a]) * delta - 0.5 * dt_a;
         p_.v[a] = v_half_[a] + lead * p_.dv_dt[a];
         if constexpr (has_energy) p_.u[a] = std::max(0.0, u_half_[a] + lead * p_.du_dt[a]);
-        if ((sub + 1) % stride_[a] == 0) active_.push_back(static_cast<std::uint32_t>(a));
+        ends_now_[a] = (sub + 1) % stride_[a] == 0;
       }
+      active_.clear();
+      for (std::size_t a = 0; a < n; ++a)
+        if (ends_now_[a]) active_.push_back(static_cast<std::uint32_t>(a));
       time_ += delta;
       prescribe_frozen(delta);
       times_.integrate += seconds_since(t0);
@@ -383,8 +394,12 @@ class Simulation {
     const auto& x = p_.x;
     const auto& h = p_.h;
     const auto& m = p_.m;
-    if constexpr (wants_number_density) number_density_.resize(p_.n_real);
     const std::size_t n_rows = rows.size();
+    // The kernel values are kept only from a pass over every particle, the one a schedule looks at.
+    constexpr bool keep_pair_kernel = wants_number_density && std::is_same_v<Rows, neighbors::FirstN>;
+    if constexpr (wants_number_density) number_density_.resize(p_.n_real);
+    if constexpr (keep_pair_kernel) pair_kernel_.resize(nl_.pairs());
+    pair_kernel_full_ = keep_pair_kernel && n_rows == p_.n_real;
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n_rows; ++i) {
       const std::uint32_t a = rows[i];
@@ -395,7 +410,10 @@ class Simulation {
         const double r = (x[a] - x[b]).norm();
         const double W_ab = kernel::W<Kernel, D>(r, 0.5 * (h[a] + h[b]));
         rho += physics::density_term(m[b], W_ab);
-        if constexpr (wants_number_density) n_a += W_ab;  // eq. (A1), for the regularization schedule
+        if constexpr (wants_number_density) {  // eq. (A1), for the regularization schedule
+          n_a += W_ab;
+          if constexpr (keep_pair_kernel) pair_kernel_[k] = W_ab;
+        }
       }
       if constexpr (!corrected) p_.rho[a] = rho;
       if constexpr (wants_number_density) number_density_[a] = n_a;
@@ -423,6 +441,7 @@ class Simulation {
       pr.m_a = p_.m[a];
       pr.rho_a = p_.rho[a];
       pr.P_a = p_.P[a];
+      pr.P_over_rho2_a = P_over_rho2_[a];
       pr.cs_a = p_.cs[a];
       pr.u_a = energy_of(a);
       const double h_a = p_.h[a];
@@ -440,6 +459,7 @@ class Simulation {
         pr.m_b = p_.m[b];
         pr.rho_b = p_.rho[b];
         pr.P_b = p_.P[b];
+        pr.P_over_rho2_b = P_over_rho2_[b];
         pr.cs_b = p_.cs[b];
         pr.u_b = energy_of(b);
         if constexpr (grad_h) {
@@ -708,7 +728,7 @@ class Simulation {
   void compute_rates_of_active() {
     auto t0 = clock::now();
     const std::size_t n = p_.n_real;
-    build_cells(1.0);
+    build_cells(1.0, false);
     row_.assign(p_.size(), -1);
     for (std::size_t i = 0; i < active_.size(); ++i) row_[active_[i]] = static_cast<std::int32_t>(i);
     const neighbors::Subset rows{&active_, &row_};
@@ -731,15 +751,21 @@ class Simulation {
   }
 
   /// Ghosts out to the widest reach (times the search margin) and the cell list over all points.
-  void build_cells(double margin) {
+  /// h_fresh: h may have changed since the last call (not so between the substeps of a block).
+  void build_cells(double margin, bool h_fresh = true) {
     const std::size_t n = p_.n_real;
-    double h_max = 0.0;
-    for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
-    boundary::make_ghosts(p_, box_, Kernel::support * h_max * margin);
-    // Cells sized by the median h: particles with larger h search more cells (neighbor_list.hpp).
-    h_scratch_.assign(p_.h.begin(), p_.h.begin() + static_cast<std::ptrdiff_t>(n));
-    std::nth_element(h_scratch_.begin(), h_scratch_.begin() + static_cast<std::ptrdiff_t>(n / 2), h_scratch_.end());
-    cells_.build(p_.x, Kernel::support * h_scratch_[n / 2] * margin);
+    if (h_fresh) {
+      double h_max = 0.0;
+#pragma omp parallel for schedule(static) reduction(max : h_max)
+      for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
+      h_max_ = h_max;
+      // Cells sized by the median h: particles with larger h search more cells (neighbor_list.hpp).
+      h_scratch_.assign(p_.h.begin(), p_.h.begin() + static_cast<std::ptrdiff_t>(n));
+      std::nth_element(h_scratch_.begin(), h_scratch_.begin() + static_cast<std::ptrdiff_t>(n / 2), h_scratch_.end());
+      h_median_ = h_scratch_[n / 2];
+    }
+    boundary::make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
+    cells_.build(p_.x, 0.5 * Kernel::support * h_median_ * margin);
   }
 
   void build_neighbors(double margin) {
@@ -815,6 +841,10 @@ class Simulation {
     boundary::refresh_ghosts(p_);
     if constexpr (grad_h)
       for (std::size_t g = n; g < p_.size(); ++g) Omega_[g] = Omega_[p_.ghost_source[g - n]];
+    const std::size_t n_all = p_.size();
+    P_over_rho2_.resize(n_all);
+#pragma omp parallel for schedule(static)
+    for (std::size_t a = 0; a < n_all; ++a) P_over_rho2_[a] = p_.P[a] / (p_.rho[a] * p_.rho[a]);
   }
 
   void prescribe_frozen(double dt) {
@@ -926,13 +956,18 @@ class Simulation {
   neighbors::NeighborList nl_;
   std::vector<double> v_sig_;
   std::vector<double> h_scratch_;
+  double h_max_ = 0.0, h_median_ = 0.0;  ///< of the real particles at the last build_cells with h_fresh
   // individual time steps: per-particle limits, strides (in finest substeps), step starts, the active
   // set and its rows, and the last evaluated density with its time and rate
   std::vector<double> dt_own_, rho_eval_, t_eval_, drho_dt_;
   std::vector<std::uint64_t> stride_, step_start_;
   std::vector<std::uint32_t> active_;
+  std::vector<std::uint8_t> ends_now_;  ///< per particle: whether its step ends with this substep
   std::vector<std::int32_t> row_;
+  std::vector<double> P_over_rho2_;     ///< P / rho^2 of every point, refreshed with the pressure
   std::vector<double> number_density_;  ///< n_a of eq. (A1), only when the regularizer wants it
+  std::vector<double> pair_kernel_;     ///< W_ab of each neighbour-list entry, with number_density_
+  bool pair_kernel_full_ = false;       ///< whether pair_kernel_ covers every real particle's row
   std::vector<double> Omega_;           ///< grad-h factors (real and ghosts), only with a smoothing-length solver
   std::vector<Mat<D>> S_over_rho2_;     ///< viscous stress / rho^2 (real and ghosts), only with a stress term
   std::vector<Vec<D>> v_half_;

@@ -22,9 +22,19 @@ class CellList {
     const std::size_t n = x.size();
     lo_ = Vec<D>::Constant(std::numeric_limits<double>::max());
     Vec<D> hi = Vec<D>::Constant(std::numeric_limits<double>::lowest());
-    for (const auto& p : x) {
-      lo_ = lo_.cwiseMin(p);
-      hi = hi.cwiseMax(p);
+#pragma omp parallel
+    {
+      Vec<D> lo_t = lo_, hi_t = hi;
+#pragma omp for schedule(static) nowait
+      for (std::size_t i = 0; i < n; ++i) {
+        lo_t = lo_t.cwiseMin(x[i]);
+        hi_t = hi_t.cwiseMax(x[i]);
+      }
+#pragma omp critical(rsph_cell_list_bounds)
+      {
+        lo_ = lo_.cwiseMin(lo_t);
+        hi = hi.cwiseMax(hi_t);
+      }
     }
     if (n == 0) {
       lo_.setZero();
@@ -46,15 +56,15 @@ class CellList {
     for (int k = 0; k < D; ++k) n_cells *= static_cast<std::size_t>(dims_[k]);
     cell_start_.assign(n_cells + 1, 0);
     cell_of_.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      cell_of_[i] = cell_index(coords(x[i]));
-      ++cell_start_[cell_of_[i] + 1];
-    }
+#pragma omp parallel for schedule(static)
+    for (std::size_t i = 0; i < n; ++i) cell_of_[i] = static_cast<std::uint32_t>(cell_index(coords(x[i])));
+    for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell_of_[i] + 1];
     for (std::size_t c = 0; c < n_cells; ++c) cell_start_[c + 1] += cell_start_[c];
     sorted_.resize(n);
     fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
     for (std::size_t i = 0; i < n; ++i) sorted_[fill_[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
     sorted_x_.resize(n);
+#pragma omp parallel for schedule(static)
     for (std::size_t k = 0; k < n; ++k) sorted_x_[k] = x[sorted_[k]];
   }
 
@@ -73,16 +83,19 @@ class CellList {
   void for_each_within_at(const Vec<D>& p, double radius, F&& f) const {
     std::array<std::int64_t, D> lo, hi;
     block_within(p, radius, lo, hi);
+    // The cells of one row along the first axis are contiguous in cell order: one run per row.
     std::array<std::int64_t, D> idx = lo;
+    const std::size_t row_length = static_cast<std::size_t>(hi[0] - lo[0] + 1);
     for (;;) {
-      const std::size_t cell = cell_index(idx);
-      for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s], sorted_x_[s]);
-      int k = 0;
+      const std::size_t first = cell_index(idx);
+      const std::uint32_t end = cell_start_[first + row_length];
+      for (std::uint32_t s = cell_start_[first]; s < end; ++s) f(sorted_[s], sorted_x_[s]);
+      int k = 1;
       for (; k < D; ++k) {
         if (++idx[k] <= hi[k]) break;
         idx[k] = lo[k];
       }
-      if (k == D) break;
+      if (k >= D) break;
     }
   }
 
@@ -144,8 +157,8 @@ class CellList {
   double inv_size_ = 1.0;
   std::array<std::int64_t, D> dims_{};
   std::vector<std::uint32_t> cell_start_, sorted_, fill_;  // fill_: build scratch, kept to reuse its storage
-  std::vector<std::size_t> cell_of_;
-  std::vector<Vec<D>> sorted_x_;  // positions in cell order
+  std::vector<std::uint32_t> cell_of_;                     // cell counts stay below 4 n + 64 (build)
+  std::vector<Vec<D>> sorted_x_;                           // positions in cell order
 };
 
 }  // namespace rsph::neighbors

@@ -79,9 +79,13 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
   auto chunk = [](std::size_t n, std::size_t t, std::size_t parts) { return n * t / parts; };
   // A point whose radius no query point falls short of has nothing to scatter: with one h for all
   // (an RSPH lattice) the scatter pass costs one comparison per point.
-  double own_min = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < n_rows; ++i) own_min = std::min(own_min, reach_of(h[rows[i]], h[rows[i]]));
+  const double own_min = [&] {  // a value, not a variable the parallel region shares, so it stays in a register
+    double least = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < n_rows; ++i) least = std::min(least, reach_of(h[rows[i]], h[rows[i]]));
+    return least;
+  }();
 
+  std::size_t n_extra = 0;
 #pragma omp parallel num_threads(n_threads)
   {
     std::size_t t = 0;
@@ -128,19 +132,21 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
           ext.emplace_back(static_cast<std::uint32_t>(row), static_cast<std::uint32_t>(b));
       });
     }
-  }
-  std::size_t n_extra = 0;
-  for (const auto& b : out.buffers) n_extra += b.scattered.size();
-  if (n_extra == 0) {
-    for (std::size_t i = 0; i < n_rows; ++i) out.offset[i + 1] += out.offset[i];
-    out.index.resize(out.offset[n_rows]);
-    std::size_t pos = 0;
-    for (const auto& b : out.buffers) {
-      std::copy(b.gathered.begin(), b.gathered.end(), out.index.begin() + static_cast<std::ptrdiff_t>(pos));
-      pos += b.gathered.size();
+#pragma omp barrier
+#pragma omp single
+    {
+      for (const auto& b : out.buffers) n_extra += b.scattered.size();
+      if (n_extra == 0) {
+        for (std::size_t i = 0; i < n_rows; ++i) out.offset[i + 1] += out.offset[i];
+        out.index.resize(out.offset[n_rows]);
+      }
     }
-    return;
+    // Without scattered pairs each thread's rows are a contiguous run of the index: copy in parallel.
+    if (n_extra == 0)
+      std::copy(buf.begin(), buf.end(),
+                out.index.begin() + static_cast<std::ptrdiff_t>(out.offset[chunk(n_rows, t, T)]));
   }
+  if (n_extra == 0) return;
   // Merge the scattered pairs: counts first, then each row's gathered list followed by its extras.
   std::vector<std::uint64_t> gathered(n_rows);
   for (std::size_t i = 0; i < n_rows; ++i) gathered[i] = out.offset[i + 1];

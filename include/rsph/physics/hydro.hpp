@@ -25,13 +25,13 @@ inline double continuity_term_by_volume(double rho_a, double V_b, const Vec<D>& 
 /// eq. (3) of the paper without Pi_ab: dv_a/dt += -m_b (P_b / rho_b^2 + P_a / rho_a^2) nabla_a W_ab.
 template <int D>
 inline Vec<D> pressure_acceleration(const Pair<D>& p) {
-  return (-p.m_b * (p.P_b / (p.rho_b * p.rho_b) + p.P_a / (p.rho_a * p.rho_a))) * p.grad_W;
+  return (-p.m_b * (p.P_over_rho2_b + p.P_over_rho2_a)) * p.grad_W;
 }
 
 /// eq. (4) of the paper without Pi_ab: de_a/dt += m_b (P_a / rho_a^2) v_ab . nabla_a W_ab.
 template <int D>
 inline double pressure_heating(const Pair<D>& p) {
-  return p.m_b * (p.P_a / (p.rho_a * p.rho_a)) * p.v_ab.dot(p.grad_W);
+  return p.m_b * p.P_over_rho2_a * p.v_ab.dot(p.grad_W);
 }
 
 /// Price 2012 eq. 34 (grad-h SPH), inviscid part:

@@ -14,6 +14,8 @@ struct Pair {
   double r;                          ///< |r_ab|
   double h_ab;                       ///< (h_a + h_b) / 2
   double m_a, m_b, rho_a, rho_b, P_a, P_b, cs_a, cs_b;
+  /// P / rho^2 of each side, as eqs. (3)-(4) use it: the driver divides once per particle, not per pair.
+  double P_over_rho2_a = 0.0, P_over_rho2_b = 0.0;
   double u_a = 0.0, u_b = 0.0;          ///< specific internal energies, zero when the gas carries none
   double Omega_a = 1.0, Omega_b = 1.0;  ///< grad-h correction factors, 1 with fixed h
 };

@@ -20,6 +20,9 @@ struct StepInfo {
   /// n_a = sum_{b != a} W_ab (eq. A1 of the paper) from the density pass, when the regularizer asks for it
   /// (`static constexpr bool wants_number_density`) and h is fixed; null otherwise.
   const std::vector<double>* number_density = nullptr;
+  /// W_ab of each entry of `neighbors` as the density pass summed it, given with number_density; so a
+  /// schedule's pair sums over the same kernel values need no distances of their own.
+  const std::vector<double>* pair_kernel = nullptr;
 };
 
 /// A regularizer decides when (`due`) and remaps the particles onto a new set (`remap`) conserving

@@ -96,20 +96,31 @@ struct Adaptive {
     if (s.number_density) {  // eq. (A1) summed by the driver's density pass
       N.resize(p.n_real);
       const auto& n_a = *s.number_density;
+#pragma omp parallel for schedule(static)
       for (std::size_t a = 0; a < p.n_real; ++a) N[a] = interaction_volume(p.h[a]) * n_a[a];
     } else {
       N = neighbour_numbers(p, nl);
     }
-    auto N_of = [&](std::uint32_t b) { return N[b < p.n_real ? b : p.ghost_source[b - p.n_real]]; };
+    // m_b / rho_b N_b of every point, ghosts taking their source's N
+    auto& volume_N = volume_N_;
+    volume_N.resize(p.size());
+#pragma omp parallel for schedule(static)
+    for (std::size_t b = 0; b < p.size(); ++b)
+      volume_N[b] = p.m[b] / p.rho[b] * N[b < p.n_real ? b : p.ghost_source[b - p.n_real]];
     // Which condition particle a violates (0: none).
     auto reason = [&](std::size_t a) {
       if (N[a] < N_min) return 1;  // eq. (A5)
       if (N[a] > N_max) return 2;
       // eq. (A4): <N>_a = sum_b m_b / rho_b N_b W_ab, the particle itself included
       double mean = p.m[a] / p.rho[a] * N[a] * kernel::W<Kernel, D>(0.0, p.h[a]);
-      for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
-        const std::uint32_t b = nl.index[k];
-        mean += p.m[b] / p.rho[b] * N_of(b) * kernel::W<Kernel, D>((p.x[a] - p.x[b]).norm(), 0.5 * (p.h[a] + p.h[b]));
+      if (s.pair_kernel) {
+        const auto& W = *s.pair_kernel;
+        for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) mean += volume_N[nl.index[k]] * W[k];
+      } else {
+        for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
+          const std::uint32_t b = nl.index[k];
+          mean += volume_N[b] * kernel::W<Kernel, D>((p.x[a] - p.x[b]).norm(), 0.5 * (p.h[a] + p.h[b]));
+        }
       }
       const double dN = (N[a] - mean) / N[a];  // eq. (A3)
       return std::abs(dN) > dN_max ? 3 : 0;    // eq. (A6)
@@ -125,7 +136,7 @@ struct Adaptive {
     return true;
   }
 
-  std::vector<double> N_;  ///< scratch: N_a of eq. (A2), kept between checks to reuse its storage
+  std::vector<double> N_, volume_N_;  ///< scratch, kept between checks to reuse its storage
 };
 
 }  // namespace rsph::schedule
