@@ -81,15 +81,23 @@ class CellList {
   /// candidates of a cell lie next to each other in memory.
   template <class F>
   void for_each_within_at(const Vec<D>& p, double radius, F&& f) const {
+    for_each_run_within(p, radius, [&](const std::uint32_t* index, const Vec<D>* at, std::size_t count) {
+      for (std::size_t s = 0; s < count; ++s) f(index[s], at[s]);
+    });
+  }
+
+  /// The same candidates as runs: f(index, x, count) for each row of cells along the first axis, whose
+  /// points are contiguous in cell order, so a caller may test a whole run without a branch per point.
+  template <class F>
+  void for_each_run_within(const Vec<D>& p, double radius, F&& f) const {
     std::array<std::int64_t, D> lo, hi;
     block_within(p, radius, lo, hi);
-    // The cells of one row along the first axis are contiguous in cell order: one run per row.
     std::array<std::int64_t, D> idx = lo;
     const std::size_t row_length = static_cast<std::size_t>(hi[0] - lo[0] + 1);
     for (;;) {
       const std::size_t first = cell_index(idx);
-      const std::uint32_t end = cell_start_[first + row_length];
-      for (std::uint32_t s = cell_start_[first]; s < end; ++s) f(sorted_[s], sorted_x_[s]);
+      const std::uint32_t begin = cell_start_[first], end = cell_start_[first + row_length];
+      if (end > begin) f(sorted_.data() + begin, sorted_x_.data() + begin, std::size_t{end - begin});
       int k = 1;
       for (; k < D; ++k) {
         if (++idx[k] <= hi[k]) break;

@@ -94,27 +94,38 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
 #endif
     auto& buf = out.buffers[t].gathered;
     auto& ext = out.buffers[t].scattered;
-    buf.clear();
     ext.clear();
-    // gather: a sees the b within its own radius
+    // gather: a sees the b within its own radius. buf keeps its size between builds (so growing it
+    // zero-fills only new storage); `used` counts what this build wrote.
+    std::size_t used = 0;
     for (std::size_t i = chunk(n_rows, t, T); i < chunk(n_rows, t + 1, T); ++i) {
       const std::uint32_t a = rows[i];
       const Vec<D> xa = x[a];
       const double ha = h[a];
       const double own = reach_of(ha, ha);
-      std::uint64_t n = 0;
       const double own2 = own * own;
-      cells.for_each_within_at(xa, own, [&](std::uint32_t b, const Vec<D>& xb) {
-        const double r2 = (xa - xb).squaredNorm();
-        if (r2 >= own2 || b == a) return;  // most candidates end here, before h_b is read
-        const double reach = reach_of(ha, h[b]);
-        if (r2 < reach * reach) {
-          buf.push_back(b);
-          ++n;
+      const std::size_t start = used;
+      cells.for_each_run_within(xa, own, [&](const std::uint32_t* index, const Vec<D>* at, std::size_t count) {
+        if (buf.size() < used + count) buf.resize(std::max(2 * buf.size(), used + count));
+        std::uint32_t* kept = buf.data();
+        // Without a branch: whether a candidate lies inside is a coin toss no predictor learns.
+        for (std::size_t s = 0; s < count; ++s) {
+          kept[used] = index[s];
+          used += static_cast<std::size_t>(((xa - at[s]).squaredNorm() < own2) & (index[s] != a));
         }
       });
-      out.offset[i + 1] = n;
+      // A b with a smaller radius may see a at a shorter reach than a's own (never on one lattice).
+      std::size_t end = start;
+      for (std::size_t k = start; k < used; ++k) {
+        const std::uint32_t b = buf[k];
+        const double reach = reach_of(ha, h[b]);
+        if (reach < own && (xa - x[b]).squaredNorm() >= reach * reach) continue;
+        buf[end++] = b;
+      }
+      used = end;
+      out.offset[i + 1] = used - start;
     }
+    buf.resize(used);
     // scatter: b with a larger radius finds the query points a that did not reach it
     for (std::size_t b = chunk(n_all, t, T); b < chunk(n_all, t + 1, T); ++b) {
       const Vec<D> xb = x[b];
