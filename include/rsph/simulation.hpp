@@ -834,9 +834,9 @@ class Simulation {
     const std::size_t n = p_.n_real;
 #pragma omp parallel for schedule(static)
     for (std::size_t a = 0; a < n; ++a) {
-      const double u = energy_of(a);
-      p_.P[a] = eos_.pressure(p_.rho[a], u, p_.x[a]);
-      p_.cs[a] = eos_.sound_speed(p_.rho[a], u, p_.x[a]);
+      const GasState g = gas_state<EOS, D>(eos_, p_.rho[a], energy_of(a), p_.x[a]);
+      p_.P[a] = g.P;
+      p_.cs[a] = g.cs;
     }
     boundary::refresh_ghosts(p_);
     if constexpr (grad_h)

@@ -14,6 +14,23 @@ concept EquationOfState = requires(const E& e, double rho, double u, const Vec<D
   { e.sound_speed(rho, u, x) } -> std::same_as<double>;
 };
 
+/// Pressure and sound speed of one state, as the driver refreshes them together.
+struct GasState {
+  double P = 0.0, cs = 0.0;
+};
+
+/// An equation of state may give both at once (`GasState state(rho, u, x) const`) when they share work,
+/// such as c_s(x) of a locally isothermal disk; otherwise the driver asks for each.
+template <class E, int D>
+GasState gas_state(const E& e, double rho, double u, const Vec<D>& x) {
+  if constexpr (requires {
+                  { e.state(rho, u, x) } -> std::same_as<GasState>;
+                })
+    return e.state(rho, u, x);
+  else
+    return {e.pressure(rho, u, x), e.sound_speed(rho, u, x)};
+}
+
 template <class E, int D>
 constexpr bool check_equation_of_state() {
   static_assert(

@@ -1,6 +1,7 @@
 #pragma once
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
+#include "rsph/eos/concept.hpp"
 
 #include <string>
 #include <utility>
@@ -40,6 +41,11 @@ struct LocallyIsothermal {
   template <class X>
   double sound_speed(double, double, const X& x) const {
     return cs_of_x(x);
+  }
+  template <class X>
+  GasState state(double rho, double, const X& x) const {
+    const double c = cs_of_x(x);  // once for both
+    return {c * c * rho, c};
   }
 };
 
