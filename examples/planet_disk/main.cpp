@@ -156,6 +156,7 @@ int main(int argc, char** argv) {
     timeline.close();
 
     io::Json phases = ex::phase_json(r.phases);
+    phases.set("measurement_and_output", r.output_seconds);
     std::vector<io::Json> mass_over_time;
     for (const auto& d : r.samples) {
       io::Json j;

@@ -10,6 +10,7 @@
 #include "rsph/physics/star_planet.hpp"
 #include "rsph/rsph.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -149,7 +150,8 @@ DiskProfile disk_profile(const P& p, const PlanetDiskParams& s) {
 
 struct DiskRun : examples::RunCost {
   std::vector<DiskSample> samples;
-  double remap_seconds = 0.0;  ///< the remaps alone; the rest of the regularization time is the schedule's check
+  double remap_seconds = 0.0;   ///< the remaps alone; the rest of the regularization time is the schedule's check
+  double output_seconds = 0.0;  ///< measurements (Sigma on the polar grid, mass) and what on_sample writes
   double mass_initial = 0.0, mass_final = 0.0, mass_removed = 0.0, max_mass_error = 0.0;
   std::size_t particles_removed = 0;
 };
@@ -165,6 +167,7 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
   // Gas that leaves the disk by more than a lattice spacing is gone: removed and counted.
   const double r_lo = s.r_in - s.spacing(), r_hi = s.r_out + s.spacing();
   auto sample = [&] {
+    const auto t0 = std::chrono::steady_clock::now();
     DiskSample d;
     d.time = sim.time();
     d.orbit = sim.time() / period;
@@ -178,6 +181,7 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
     r.max_mass_error = std::max(r.max_mass_error, std::abs(d.mass + r.mass_removed - r.mass_initial) / r.mass_initial);
     r.samples.push_back(d);
     on_sample(sim, r.samples.back());
+    r.output_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   };
   sample();
   for (int k = 1; sim.time() < t_end * (1.0 - 1e-14); ++k) {
