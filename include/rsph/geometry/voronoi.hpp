@@ -31,6 +31,7 @@
 #include <cstdint>
 #include <exception>
 #include <limits>
+#include <span>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -267,7 +268,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
   /// Cuts the cell by the bisectors of the candidates. Returns false when one coincides with the particle.
   /// r2_max, the squared farthest vertex distance, is refreshed once at the end: cuts only shrink the cell,
   /// so a stale value still bounds it and skips only what cannot cut.
-  static bool cut_by(const std::vector<Candidate>& candidates, ConvexPolygon*& cell, ConvexPolygon*& scratch,
+  static bool cut_by(std::span<const Candidate> candidates, ConvexPolygon*& cell, ConvexPolygon*& scratch,
                      double& r2_max) {
     bool cut = false;
     for (const auto& [d2, d] : candidates) {
@@ -297,7 +298,9 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
     std::atomic<bool> ok{true};
     detail::run_parallel(sites.n_real, [&](int thread, std::size_t begin, std::size_t end) {
       ConvexPolygon buffers[2];
+      // Candidate buffers keep their size; n_near and n_far count what the current disc wrote.
       std::vector<Candidate> near, far;
+      std::size_t n_near = 0, n_far = 0;
       for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
         const Point xa = sites.x[a];
         const double closing = closing_radius.empty() ? 0.0 : closing_radius[a];
@@ -313,18 +316,28 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
         for (double radius = first_radius_spacings * spacing;; radius *= disc_growth) {
           const double outer2 = radius * radius;
           const double near2 = 0.390625 * outer2;  // (5/8 of the radius)^2
-          near.clear();
-          far.clear();
-          cells.for_each_within_at(xa, radius, [&](std::uint32_t b, const Point& xb) {
-            if (b == a) return;
-            const Point d = xb - xa;
-            const double d2 = d.squaredNorm();
-            if (d2 <= inner2 || d2 > outer2) return;
-            (d2 <= near2 ? near : far).push_back({d2, d});
+          n_near = n_far = 0;
+          cells.for_each_run_within(xa, radius, [&](const std::uint32_t* index, const Point* at, std::size_t count) {
+            if (near.size() < n_near + count) near.resize(2 * (n_near + count));
+            if (far.size() < n_far + count) far.resize(2 * (n_far + count));
+            // Each candidate is written to both lists and kept by advancing one count, without a branch:
+            // in or out, near or far are coin tosses no predictor learns.
+            for (std::size_t s = 0; s < count; ++s) {
+              const Point d = at[s] - xa;
+              const double d2 = d.squaredNorm();
+              const bool in = (d2 > inner2) & (d2 <= outer2) & (index[s] != a);
+              const bool is_near = d2 <= near2;
+              near[n_near] = {d2, d};
+              far[n_far] = {d2, d};
+              n_near += static_cast<std::size_t>(in & is_near);
+              n_far += static_cast<std::size_t>(in & !is_near);
+            }
           });
-          for (std::size_t i = 1; i < near.size(); ++i)  // a handful: insertion sort
+          for (std::size_t i = 1; i < n_near; ++i)  // a handful: insertion sort
             for (std::size_t j = i; j > 0 && near[j - 1].d2 > near[j].d2; --j) std::swap(near[j - 1], near[j]);
-          if (!cut_by(near, cell, scratch, r2_max) || !cut_by(far, cell, scratch, r2_max)) break;
+          if (!cut_by({near.data(), n_near}, cell, scratch, r2_max) ||
+              !cut_by({far.data(), n_far}, cell, scratch, r2_max))
+            break;
           if (4.0 * r2_max <= outer2 || cells.covers(xa, radius)) break;
           inner2 = outer2;
         }

@@ -72,22 +72,14 @@ class CellList {
   /// (a superset of the points closer than `radius`).
   template <class F>
   void for_each_within(const Vec<D>& p, double radius, F&& f) const {
-    std::array<std::int64_t, D> lo, hi;
-    block_within(p, radius, lo, hi);
-    for_each_in_block(lo, hi, f);
-  }
-
-  /// As for_each_within, calling f(j, x_j) with the position read from a copy in cell order, so the
-  /// candidates of a cell lie next to each other in memory.
-  template <class F>
-  void for_each_within_at(const Vec<D>& p, double radius, F&& f) const {
-    for_each_run_within(p, radius, [&](const std::uint32_t* index, const Vec<D>* at, std::size_t count) {
-      for (std::size_t s = 0; s < count; ++s) f(index[s], at[s]);
+    for_each_run_within(p, radius, [&](const std::uint32_t* index, const Vec<D>*, std::size_t count) {
+      for (std::size_t s = 0; s < count; ++s) f(index[s]);
     });
   }
 
-  /// The same candidates as runs: f(index, x, count) for each row of cells along the first axis, whose
-  /// points are contiguous in cell order, so a caller may test a whole run without a branch per point.
+  /// The candidates of for_each_within as runs: f(index, x, count) for each row of cells along the first
+  /// axis, whose points (and their positions, copied in cell order) are contiguous, so a caller may test a
+  /// whole run without a branch per point.
   template <class F>
   void for_each_run_within(const Vec<D>& p, double radius, F&& f) const {
     std::array<std::int64_t, D> lo, hi;
@@ -121,22 +113,6 @@ class CellList {
   const std::vector<std::uint32_t>& sorted() const { return sorted_; }
 
  private:
-  // Every point of the cells in the index block [lo, hi] (inclusive, inside the grid).
-  template <class F>
-  void for_each_in_block(const std::array<std::int64_t, D>& lo, const std::array<std::int64_t, D>& hi, F& f) const {
-    std::array<std::int64_t, D> idx = lo;
-    for (;;) {
-      const std::size_t cell = cell_index(idx);
-      for (std::uint32_t s = cell_start_[cell]; s < cell_start_[cell + 1]; ++s) f(sorted_[s]);
-      int k = 0;
-      for (; k < D; ++k) {
-        if (++idx[k] <= hi[k]) break;
-        idx[k] = lo[k];
-      }
-      if (k == D) break;
-    }
-  }
-
   // The index block of the cells meeting the square of half-width `radius` around p.
   void block_within(const Vec<D>& p, double radius, std::array<std::int64_t, D>& lo,
                     std::array<std::int64_t, D>& hi) const {
