@@ -19,7 +19,8 @@ struct NeighborList {
   std::vector<std::uint32_t> index;
   /// Per-thread gather buffers, kept between builds so that a list rebuilt every step reuses its pages.
   struct alignas(64) Buffers {
-    std::vector<std::uint32_t> gathered;
+    std::vector<std::uint32_t> gathered;  ///< sized generously and never shrunk: growing a vector zero-fills
+    std::size_t n_gathered = 0;           ///< the entries of `gathered` the last build wrote
     std::vector<std::pair<std::uint32_t, std::uint32_t>> scattered;  ///< (row of a, b) from b's side
   };
   std::vector<Buffers> buffers;
@@ -95,8 +96,7 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
     auto& buf = out.buffers[t].gathered;
     auto& ext = out.buffers[t].scattered;
     ext.clear();
-    // gather: a sees the b within its own radius. buf keeps its size between builds (so growing it
-    // zero-fills only new storage); `used` counts what this build wrote.
+    // gather: a sees the b within its own radius; `used` counts what this build wrote into buf.
     std::size_t used = 0;
     for (std::size_t i = chunk(n_rows, t, T); i < chunk(n_rows, t + 1, T); ++i) {
       const std::uint32_t a = rows[i];
@@ -125,7 +125,7 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
       used = end;
       out.offset[i + 1] = used - start;
     }
-    buf.resize(used);
+    out.buffers[t].n_gathered = used;
     // scatter: b with a larger radius finds the query points a that did not reach it
     for (std::size_t b = chunk(n_all, t, T); b < chunk(n_all, t + 1, T); ++b) {
       const Vec<D> xb = x[b];
@@ -154,7 +154,7 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
     }
     // Without scattered pairs each thread's rows are a contiguous run of the index: copy in parallel.
     if (n_extra == 0)
-      std::copy(buf.begin(), buf.end(),
+      std::copy(buf.begin(), buf.begin() + static_cast<std::ptrdiff_t>(used),
                 out.index.begin() + static_cast<std::ptrdiff_t>(out.offset[chunk(n_rows, t, T)]));
   }
   if (n_extra == 0) return;
@@ -171,7 +171,9 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
   out.index.resize(out.offset[n_rows]);
   std::vector<std::uint32_t> all_gathered;
   all_gathered.reserve(gathered_start[n_rows]);
-  for (const auto& b : out.buffers) all_gathered.insert(all_gathered.end(), b.gathered.begin(), b.gathered.end());
+  for (const auto& b : out.buffers)
+    all_gathered.insert(all_gathered.end(), b.gathered.begin(),
+                        b.gathered.begin() + static_cast<std::ptrdiff_t>(b.n_gathered));
   std::vector<std::uint64_t> fill(n_rows);
   for (std::size_t i = 0; i < n_rows; ++i) {
     std::copy(all_gathered.begin() + static_cast<std::ptrdiff_t>(gathered_start[i]),
