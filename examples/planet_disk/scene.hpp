@@ -10,7 +10,6 @@
 #include "rsph/physics/star_planet.hpp"
 #include "rsph/rsph.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -167,7 +166,7 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
   // Gas that leaves the disk by more than a lattice spacing is gone: removed and counted.
   const double r_lo = s.r_in - s.spacing(), r_hi = s.r_out + s.spacing();
   auto sample = [&] {
-    const auto t0 = std::chrono::steady_clock::now();
+    const double t0 = r.elapsed();
     DiskSample d;
     d.time = sim.time();
     d.orbit = sim.time() / period;
@@ -181,7 +180,7 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
     r.max_mass_error = std::max(r.max_mass_error, std::abs(d.mass + r.mass_removed - r.mass_initial) / r.mass_initial);
     r.samples.push_back(d);
     on_sample(sim, r.samples.back());
-    r.output_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.output_seconds += r.elapsed() - t0;
   };
   sample();
   for (int k = 1; sim.time() < t_end * (1.0 - 1e-14); ++k) {
