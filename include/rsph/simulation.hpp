@@ -399,7 +399,7 @@ class Simulation {
     constexpr bool keep_pair_kernel = wants_number_density && std::is_same_v<Rows, neighbors::FirstN>;
     if constexpr (wants_number_density) number_density_.resize(p_.n_real);
     if constexpr (keep_pair_kernel) pair_kernel_.resize(nl_.pairs());
-    pair_kernel_full_ = keep_pair_kernel && n_rows == p_.n_real;
+    pair_kernel_full_ = keep_pair_kernel;  // a subset pass leaves the kept values stale
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n_rows; ++i) {
       const std::uint32_t a = rows[i];
@@ -967,7 +967,7 @@ class Simulation {
   std::vector<double> P_over_rho2_;     ///< P / rho^2 of every point, refreshed with the pressure
   std::vector<double> number_density_;  ///< n_a of eq. (A1), only when the regularizer wants it
   std::vector<double> pair_kernel_;     ///< W_ab of each neighbour-list entry, with number_density_
-  bool pair_kernel_full_ = false;       ///< whether pair_kernel_ covers every real particle's row
+  bool pair_kernel_full_ = false;       ///< whether the last density pass (over every particle) filled pair_kernel_
   std::vector<double> Omega_;           ///< grad-h factors (real and ghosts), only with a smoothing-length solver
   std::vector<Mat<D>> S_over_rho2_;     ///< viscous stress / rho^2 (real and ghosts), only with a stress term
   std::vector<Vec<D>> v_half_;
