@@ -160,13 +160,13 @@ inline double clipped_area_rect(const ConvexPolygon& p, double x0, double y0, do
 
 namespace detail {
 /// Mean over y in [y0, y1] (y0 <= y1) of clamp(y - lo, 0, hi - lo): the integrand of grid_overlaps.
-inline double mean_clamped_height(double y0, double y1, double lo, double hi) {
-  const double span = y1 - y0;
-  if (!(span > 0.0)) return std::clamp(y0, lo, hi) - lo;
+/// `inv_span` is 1 / (y1 - y0), or 0 where y0 == y1 (a level segment).
+inline double mean_clamped_height(double y0, double y1, double inv_span, double lo, double hi) {
+  if (inv_span == 0.0) return std::clamp(y0, lo, hi) - lo;
   const double s0 = std::clamp(y0, lo, hi), s1 = std::clamp(y1, lo, hi);
   const double inside = (s1 - s0) * (0.5 * (s0 + s1) - lo);
   const double above = std::max(0.0, y1 - std::max(y0, hi)) * (hi - lo);
-  return (inside + above) / span;
+  return (inside + above) * inv_span;
 }
 }  // namespace detail
 
@@ -196,12 +196,12 @@ inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, con
       const double yb = last ? r.y() : l.y() + (xb - l.x()) * slope;
       const double weight = sign * (xb - xa);
       const double y_min = std::min(ya, yb), y_max = std::max(ya, yb);
+      const double inv_span = y_max > y_min ? 1.0 / (y_max - y_min) : 0.0;
       double* column = area.data() + static_cast<std::size_t>(c) * static_cast<std::size_t>(n_j);
-      for (int j = 0; j < n_j && ys[j] < y_max; ++j) {
-        const double height = ys[j + 1] <= y_min ? ys[j + 1] - ys[j]  // the row lies wholly below
-                                                 : detail::mean_clamped_height(y_min, y_max, ys[j], ys[j + 1]);
-        column[j] += weight * height;
-      }
+      int j = 0;
+      for (; j < n_j && ys[j + 1] <= y_min; ++j) column[j] += weight * (ys[j + 1] - ys[j]);  // rows wholly below
+      for (; j < n_j && ys[j] < y_max; ++j)
+        column[j] += weight * detail::mean_clamped_height(y_min, y_max, inv_span, ys[j], ys[j + 1]);
       if (last) break;
       xa = xb;
       ya = yb;

@@ -82,8 +82,14 @@ class CellList {
   /// whole run without a branch per point.
   template <class F>
   void for_each_run_within(const Vec<D>& p, double radius, F&& f) const {
+    for_each_run_in_box(p - Vec<D>::Constant(radius), p + Vec<D>::Constant(radius), f);
+  }
+
+  /// The same runs for the cells that meet the box [box_lo, box_hi].
+  template <class F>
+  void for_each_run_in_box(const Vec<D>& box_lo, const Vec<D>& box_hi, F&& f) const {
     std::array<std::int64_t, D> lo, hi;
-    block_within(p, radius, lo, hi);
+    block_of(box_lo, box_hi, lo, hi);
     std::array<std::int64_t, D> idx = lo;
     const std::size_t row_length = static_cast<std::size_t>(hi[0] - lo[0] + 1);
     for (;;) {
@@ -113,13 +119,13 @@ class CellList {
   const std::vector<std::uint32_t>& sorted() const { return sorted_; }
 
  private:
-  // The index block of the cells meeting the square of half-width `radius` around p.
-  void block_within(const Vec<D>& p, double radius, std::array<std::int64_t, D>& lo,
-                    std::array<std::int64_t, D>& hi) const {
+  // The index block of the cells meeting the box [box_lo, box_hi].
+  void block_of(const Vec<D>& box_lo, const Vec<D>& box_hi, std::array<std::int64_t, D>& lo,
+                std::array<std::int64_t, D>& hi) const {
     for (int k = 0; k < D; ++k) {
-      lo[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - radius - lo_[k]) * inv_size_)), 0,
+      lo[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((box_lo[k] - lo_[k]) * inv_size_)), 0,
                                        dims_[k] - 1);
-      hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] + radius - lo_[k]) * inv_size_)), 0,
+      hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((box_hi[k] - lo_[k]) * inv_size_)), 0,
                                        dims_[k] - 1);
     }
   }

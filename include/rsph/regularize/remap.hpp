@@ -110,6 +110,9 @@ struct RemapWorkspace {
 namespace detail {
 
 inline std::int64_t wrap_index(std::int64_t i, std::int64_t period) {
+  if (i >= 0 && i < period) return i;  // almost always: spare the integer division
+  if (i >= period && i < 2 * period) return i - period;
+  if (i < 0 && i >= -period) return i + period;
   i %= period;
   return i < 0 ? i + period : i;
 }
@@ -268,14 +271,19 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
     struct alignas(64) Scratch {  // per thread, a cache line apart
       std::vector<std::pair<std::size_t, double>> overlaps;
       std::vector<double> lines, omegas;
+      std::vector<std::int64_t> parts;
     };
     std::vector<Scratch> scratch;
 
-    std::array<std::int64_t, 2> clamp_to_walls(std::array<std::int64_t, 2> idx) const {
-      for (std::size_t k = 0; k < 2; ++k)
-        if (box->edge[static_cast<int>(k)] == Edge::reflecting)
-          idx[k] = std::clamp(idx[k], grid->range.lo[k], grid->range.hi[k]);
-      return idx;
+    /// Axis k's part of the flat index of lattice index i: wrapped on periodic axes, clamped at walls
+    /// (a round-off sliver beyond a wall); -1 outside the grid.
+    std::int64_t axis_part(int k, std::int64_t i) const {
+      const auto kk = static_cast<std::size_t>(k);
+      if (grid->periods[kk] > 0) i = wrap_index(i, grid->periods[kk]);
+      i -= grid->range.lo[kk];
+      if (box->edge[k] == Edge::reflecting) i = std::clamp<std::int64_t>(i, 0, grid->count[kk] - 1);
+      if (i < 0 || i >= grid->count[kk]) return -1;
+      return k == 0 ? i : i * grid->count[0];
     }
     void restart() { action->restart(); }
     void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
@@ -295,13 +303,11 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
       const geometry::Bounds cb = geometry::bounds(cell);
       const double cell_area = geometry::area(cell);
       const auto r = lattice->cells_touching(*box, Vec<2>(cb.lo + xo), Vec<2>(cb.hi + xo));
-      auto add_overlap = [&](std::array<std::int64_t, 2> idx, double omega) {
-        std::int64_t f = grid->flat(idx);
-        if (f < 0) f = grid->flat(clamp_to_walls(idx));  // round-off sliver beyond a wall
-        if (f < 0)
+      auto add_overlap = [&](std::int64_t col_part, std::int64_t row_part, double omega) {
+        if ((col_part | row_part) < 0)
           throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
                                std::to_string(a) + ")");
-        ov.emplace_back(static_cast<std::size_t>(f), omega);
+        ov.emplace_back(static_cast<std::size_t>(col_part + row_part), omega);
       };
       if constexpr (Lattice::rectangular_cells) {
         // All overlaps in one pass over the cell's edges; round-off crumbs in cells the old cell only
@@ -314,18 +320,25 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
         for (int c = 0; c <= n_j; ++c) ys[c] = lattice->line(*box, 1, r.lo[1] + c, xo[1]);
         auto& omegas = own.omegas;
         geometry::grid_overlaps(cell, lines.data(), n_i, ys, n_j, omegas);
+        // The flat index is a column part plus a row part: each is wrapped (periodic) or clamped (walls)
+        // once per cell instead of once per overlap.
+        auto& parts = own.parts;
+        parts.resize(static_cast<std::size_t>(n_i + n_j));
+        std::int64_t* cols = parts.data();
+        std::int64_t* rows = cols + n_i;
+        for (int i = 0; i < n_i; ++i) cols[i] = axis_part(0, r.lo[0] + i);
+        for (int j = 0; j < n_j; ++j) rows[j] = axis_part(1, r.lo[1] + j);
         const double crumb = 1e-13 * cell_area;
         for (int i = 0; i < n_i; ++i)
           for (int j = 0; j < n_j; ++j) {
             const double omega = omegas[static_cast<std::size_t>(i * n_j + j)];
-            if (omega > crumb) add_overlap({r.lo[0] + i, r.lo[1] + j}, omega);
+            if (omega > crumb) add_overlap(cols[i], rows[j], omega);
           }
       } else {
         for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
           for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
-            const std::array<std::int64_t, 2> idx{i, j};
-            const double omega = geometry::area(geometry::clip_convex(cell, lattice->cell(*box, idx, xo)));
-            if (omega > 0.0) add_overlap(idx, omega);
+            const double omega = geometry::area(geometry::clip_convex(cell, lattice->cell(*box, {i, j}, xo)));
+            if (omega > 0.0) add_overlap(axis_part(0, i), axis_part(1, j), omega);
           }
       }
       (*action)(thread, a, cell, ov, cell_area);
