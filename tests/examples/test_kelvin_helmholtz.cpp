@@ -41,3 +41,24 @@ TEST_CASE("Kelvin-Helmholtz at density ratio 10: RSPH grows the seeded mode", "[
   const auto cond = scenes::run_kelvin_helmholtz(true, s, none, none);
   CHECK(cond.amplitude_final > rsph.amplitude_final);
 }
+
+TEST_CASE("Kelvin-Helmholtz: RSPH's growth converges towards linear theory, 5x the seed at tau_KH by 1/Delta = 512",
+          "[kelvin_helmholtz]") {
+  // At reduced resolution the remap smooths the interface over a few Delta and slows the mode (2x the seed at
+  // 1/Delta = 128, 4.5x at the paper's 256); the issue's 5x holds once the interface is resolved.
+  scenes::KelvinHelmholtzParams s;
+  const auto none = [](const auto&) {};
+  const double linear = 2.0 * std::numbers::pi / s.tau_KH();
+  s.cells = 128;
+  const auto coarse = scenes::run_kelvin_helmholtz(true, s, none, none);
+  s.cells = 512;
+  const auto fine = scenes::run_kelvin_helmholtz(true, s, none, none);
+  INFO("1/Delta = 128: " << coarse.amplitude_final / coarse.seed << "x, rate " << coarse.growth_rate
+                         << "; 512: " << fine.amplitude_final / fine.seed << "x, rate " << fine.growth_rate
+                         << " (linear theory " << linear << ")");
+  CHECK(fine.amplitude_final > 5.0 * fine.seed);
+  CHECK(fine.amplitude_final / fine.seed > 2.0 * coarse.amplitude_final / coarse.seed);
+  CHECK(fine.growth_rate > 0.75 * linear);
+  CHECK(fine.growth_rate > coarse.growth_rate);
+  CHECK(std::abs(fine.energy_error) < 2e-3);
+}
