@@ -93,14 +93,29 @@ TEST_CASE("planet disk, reduced: mass kept, no NaN, and the gap deepens after th
     return (r.samples[first].gap_depth + r.samples[first + 1].gap_depth + r.samples[first + 2].gap_depth) / 3.0;
   };
   const double d5 = mean_depth(5), d8 = mean_depth(8), d11 = mean_depth(11);
-  INFO("gap depth, mean over orbits 5-7, 8-10, 11-13: " << d5 << ", " << d8 << ", " << d11);
+  // the trend over orbits 5-13 by least squares: single three-orbit means still scatter by ~0.01, which the
+  // rounding differences between thread counts are enough to tip
+  double mean_t = 0.0, mean_d = 0.0;
+  for (std::size_t k = 5; k <= 13; ++k) {
+    mean_t += static_cast<double>(k) / 9.0;
+    mean_d += r.samples[k].gap_depth / 9.0;
+  }
+  double cov = 0.0, var = 0.0;
+  for (std::size_t k = 5; k <= 13; ++k) {
+    cov += (static_cast<double>(k) - mean_t) * (r.samples[k].gap_depth - mean_d);
+    var += (static_cast<double>(k) - mean_t) * (static_cast<double>(k) - mean_t);
+  }
+  const double slope = cov / var;
+  INFO("gap depth, mean over orbits 5-7, 8-10, 11-13: " << d5 << ", " << d8 << ", " << d11 << "; trend over 5-13 "
+                                                        << slope << " per orbit");
   // what stays plus what left the disk's edges equals the start, to round-off; nothing leaves here
   CHECK(r.max_mass_error < 1e-12);
   CHECK(r.mass_removed < 1e-3 * r.mass_initial);
   CHECK(r.regularizations > 30);
   CHECK(r.samples[0].gap_depth > 0.99);
   CHECK(d8 < d5 - 0.01);
-  CHECK(d11 < d8);
+  CHECK(d11 < d5 - 0.02);
+  CHECK(slope < -0.003);
   CHECK(d11 < 0.88);
 }
 
