@@ -179,6 +179,15 @@ inline void check_coincident(const ConvexPolygon& cell, std::size_t a) {
     throw InputError("Voronoi cells: particle " + std::to_string(a) + " coincides with another particle");
 }
 
+/// What both builders do once the neighbours have cut a cell: a coincident particle is an error, open
+/// edges close the cell, and a cell reaching past the periodic images returns false (wider images needed).
+inline bool finish_cell(ConvexPolygon*& cell, ConvexPolygon*& scratch, std::size_t a, const Point& xa,
+                        const Box<2>& box, double margin, double closing_radius) {
+  check_coincident(*cell, a);
+  close_with_disc(cell, scratch, box, closing_radius);
+  return !needs_more_images(*cell, xa, box, margin);
+}
+
 /// Runs body(thread, begin, end) over contiguous chunks of [0, n), one per thread. An exception
 /// thrown in a chunk is carried out of the parallel region and rethrown (the first one wins).
 template <class Body>
@@ -385,9 +394,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
           }
           inner2 = outer2;
         }
-        detail::check_coincident(*cell, a);
-        detail::close_with_disc(cell, scratch, box, closing);
-        if (detail::needs_more_images(*cell, xa, box, margin)) {
+        if (!detail::finish_cell(cell, scratch, a, xa, box, margin, closing)) {
           ok.store(false, std::memory_order_relaxed);
           break;
         }
@@ -479,9 +486,7 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
           if (cell->empty()) break;
           cut_group(nb);
         }
-        detail::check_coincident(*cell, a);
-        detail::close_with_disc(cell, scratch, box, closing);
-        if (detail::needs_more_images(*cell, xa, box, margin)) {
+        if (!detail::finish_cell(cell, scratch, a, xa, box, margin, closing)) {
           ok.store(false, std::memory_order_relaxed);
           break;
         }
