@@ -52,6 +52,8 @@ class Simulation {
  public:
   static constexpr int dim = D;
   static constexpr bool has_energy = EOS::has_internal_energy;
+  /// Pressureless gas skips the pressure terms of the pair loops (eos/concept.hpp).
+  static constexpr bool has_pressure = exerts_pressure<EOS>();
   /// Equal-mass SPH with h solved from the density (a SmoothingLengthSolver term); otherwise h is fixed
   /// between regularizations and pairs use h_ab = (h_a + h_b) / 2 as in the paper.
   static constexpr bool grad_h = (SmoothingLengthSolver<Terms> || ...);
@@ -350,15 +352,16 @@ class Simulation {
 #pragma omp parallel for schedule(static)
     for (std::size_t a = 0; a < n; ++a) {
       Mat<D> G = Mat<D>::Zero();
+      const double h_a = p_.h[a], inv_h_a = 1.0 / h_a;
       for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
         const std::uint32_t b = nl_.index[k];
         const Vec<D> r_ab = p_.x[a] - p_.x[b];
         const double r = r_ab.norm();
         if (r <= 0.0) continue;
         if constexpr (grad_h)
-          if (r >= Kernel::support * std::max(p_.h[a], p_.h[b])) continue;
+          if (r >= Kernel::support * std::max(h_a, p_.h[b])) continue;
         G += physics::velocity_gradient_term<D>(p_.m[b], p_.rho[b], p_.v[a] - p_.v[b],
-                                                pair_grad_W(r_ab, r, p_.h[a], p_.h[b]));
+                                                pair_grad_W(r_ab, r, h_a, inv_h_a, p_.h[b]));
       }
       const double rho = p_.rho[a];
       S_over_rho2_[a] = term.stress(G, rho) / (rho * rho);
@@ -403,12 +406,13 @@ class Simulation {
 #pragma omp parallel for schedule(static)
     for (std::size_t i = 0; i < n_rows; ++i) {
       const std::uint32_t a = rows[i];
-      double rho = m[a] * kernel::W<Kernel, D>(0.0, h[a]);
+      const double h_a = h[a], inv_h_a = 1.0 / h_a;
+      double rho = m[a] * kernel::W_inv_h<Kernel, D>(0.0, inv_h_a);
       double n_a = 0.0;
       for (auto k = nl_.offset[i]; k < nl_.offset[i + 1]; ++k) {
         const std::uint32_t b = nl_.index[k];
         const double r = (x[a] - x[b]).norm();
-        const double W_ab = kernel::W<Kernel, D>(r, 0.5 * (h[a] + h[b]));
+        const double W_ab = kernel::W_inv_h<Kernel, D>(r, kernel::inv_h_ab(h_a, inv_h_a, h[b]));
         rho += physics::density_term(m[b], W_ab);
         if constexpr (wants_number_density) {  // eq. (A1), for the regularization schedule
           n_a += W_ab;
@@ -440,11 +444,13 @@ class Simulation {
       physics::Pair<D> pr;
       pr.m_a = p_.m[a];
       pr.rho_a = p_.rho[a];
-      pr.P_a = p_.P[a];
-      pr.P_over_rho2_a = P_over_rho2_[a];
+      if constexpr (has_pressure) {
+        pr.P_a = p_.P[a];
+        pr.P_over_rho2_a = P_over_rho2_[a];
+      }
       pr.cs_a = p_.cs[a];
       pr.u_a = energy_of(a);
-      const double h_a = p_.h[a];
+      const double h_a = p_.h[a], inv_h_a = 1.0 / h_a;
       if constexpr (grad_h) pr.Omega_a = Omega_[a];
       for (auto k = nl_.offset[i]; k < nl_.offset[i + 1]; ++k) {
         const std::uint32_t b = nl_.index[k];
@@ -458,29 +464,32 @@ class Simulation {
         pr.h_ab = 0.5 * (h_a + h_b);
         pr.m_b = p_.m[b];
         pr.rho_b = p_.rho[b];
-        pr.P_b = p_.P[b];
-        pr.P_over_rho2_b = P_over_rho2_[b];
+        if constexpr (has_pressure) {
+          pr.P_b = p_.P[b];
+          pr.P_over_rho2_b = P_over_rho2_[b];
+        }
         pr.cs_b = p_.cs[b];
         pr.u_b = energy_of(b);
         if constexpr (grad_h) {
-          pr.grad_W_a = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, h_a);
+          pr.grad_W_a = kernel::grad_W_inv_h<Kernel, D>(pr.r_ab, pr.r, inv_h_a);
           pr.grad_W_b = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, h_b);
           pr.grad_W = 0.5 * (pr.grad_W_a + pr.grad_W_b);
           pr.Omega_b = Omega_[b];
-          dv += physics::pressure_acceleration_grad_h(pr);
-          if constexpr (has_energy) du += physics::pressure_heating_grad_h(pr);
+          if constexpr (has_pressure) dv += physics::pressure_acceleration_grad_h(pr);
+          if constexpr (has_pressure && has_energy) du += physics::pressure_heating_grad_h(pr);
         } else {
-          pr.grad_W = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, pr.h_ab);
+          const double inv_h = kernel::inv_h_ab(h_a, inv_h_a, h_b);
+          pr.grad_W = kernel::grad_W_inv_h<Kernel, D>(pr.r_ab, pr.r, inv_h);
           if constexpr (corrected)
             if (band_[a] && band_[b])
               pr.grad_W =
-                  physics::consistent_gradient<D>(pr.grad_W, kernel::W<Kernel, D>(pr.r, pr.h_ab), psi_[a], psi_[b]);
+                  physics::consistent_gradient<D>(pr.grad_W, kernel::W_inv_h<Kernel, D>(pr.r, inv_h), psi_[a], psi_[b]);
           if constexpr (corrected)
             drho += physics::continuity_term_by_volume(pr.rho_a, pr.m_b / pr.rho_b, pr.v_ab, pr.grad_W);
           else if constexpr (with_drho)
             drho += physics::continuity_term(pr.m_b, pr.v_ab, pr.grad_W);
-          dv += physics::pressure_acceleration(pr);
-          if constexpr (has_energy) du += physics::pressure_heating(pr);
+          if constexpr (has_pressure) dv += physics::pressure_acceleration(pr);
+          if constexpr (has_pressure && has_energy) du += physics::pressure_heating(pr);
         }
         std::apply([&](const auto&... term) { (add_pair_term(term, pr, dv, du, v_sig), ...); }, terms_);
         if constexpr (has_stress) {
@@ -553,11 +562,11 @@ class Simulation {
   const auto& h_solver() const { return std::get<solver_index()>(terms_); }
 
   /// nabla_a W of a pair as the force sum uses it: at h_ab, or the mean of both h in grad-h SPH.
-  static Vec<D> pair_grad_W(const Vec<D>& r_ab, double r, double h_a, double h_b) {
+  static Vec<D> pair_grad_W(const Vec<D>& r_ab, double r, double h_a, double inv_h_a, double h_b) {
     if constexpr (grad_h)
-      return 0.5 * (kernel::grad_W<Kernel, D>(r_ab, r, h_a) + kernel::grad_W<Kernel, D>(r_ab, r, h_b));
+      return 0.5 * (kernel::grad_W_inv_h<Kernel, D>(r_ab, r, inv_h_a) + kernel::grad_W<Kernel, D>(r_ab, r, h_b));
     else
-      return kernel::grad_W<Kernel, D>(r_ab, r, 0.5 * (h_a + h_b));
+      return kernel::grad_W_inv_h<Kernel, D>(r_ab, r, kernel::inv_h_ab(h_a, inv_h_a, h_b));
   }
 
   /// psi of the consistent gradient (physics/consistent_gradient.hpp) on the band of particles around level

@@ -36,3 +36,10 @@ TEST_CASE("isothermal, locally isothermal, polytropic and pressureless gases", "
   CHECK(dust.sound_speed(2.0, 1.0, x) == 0.0);
   CHECK_THROWS_WITH(eos::Isothermal{-1.0}.validate(), Catch::Contains("sound speed must be positive"));
 }
+
+TEST_CASE("equations of state say whether the gas exerts pressure", "[eos]") {
+  // a pressureless gas skips the pressure terms of the pair loops; the others keep them
+  STATIC_REQUIRE(!exerts_pressure<eos::Pressureless>());
+  STATIC_REQUIRE(exerts_pressure<eos::IdealGas>());
+  STATIC_REQUIRE(exerts_pressure<eos::Isothermal>());
+}

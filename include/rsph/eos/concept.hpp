@@ -14,6 +14,17 @@ concept EquationOfState = requires(const E& e, double rho, double u, const Vec<D
   { e.sound_speed(rho, u, x) } -> std::same_as<double>;
 };
 
+/// Whether the gas pushes at all. An equation of state without pressure (dust, a pressureless ring)
+/// says `static constexpr bool exerts_pressure = false`, and the pair loops then skip eqs. (3)-(4)'s
+/// pressure terms instead of summing zeros; every other one exerts pressure.
+template <class E>
+constexpr bool exerts_pressure() {
+  if constexpr (requires { E::exerts_pressure; })
+    return E::exerts_pressure;
+  else
+    return true;
+}
+
 /// Pressure and sound speed of one state, as the driver refreshes them together.
 struct GasState {
   double P = 0.0, cs = 0.0;

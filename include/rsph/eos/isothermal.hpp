@@ -52,6 +52,7 @@ struct LocallyIsothermal {
 /// No pressure at all (the viscous ring of §4).
 struct Pressureless {
   static constexpr bool has_internal_energy = false;
+  static constexpr bool exerts_pressure = false;
   template <class X>
   double pressure(double, double, const X&) const {
     return 0.0;

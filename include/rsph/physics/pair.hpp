@@ -13,7 +13,8 @@ struct Pair {
   Vec<D> grad_W_b = Vec<D>::Zero();  ///< grad-h SPH only: nabla_a W(r_ab, h_b)
   double r;                          ///< |r_ab|
   double h_ab;                       ///< (h_a + h_b) / 2
-  double m_a, m_b, rho_a, rho_b, P_a, P_b, cs_a, cs_b;
+  double m_a, m_b, rho_a, rho_b, cs_a, cs_b;
+  double P_a = 0.0, P_b = 0.0;  ///< zero for a gas that exerts no pressure (the driver skips them)
   /// P / rho^2 of each side, as eqs. (3)-(4) use it: the driver divides once per particle, not per pair.
   double P_over_rho2_a = 0.0, P_over_rho2_b = 0.0;
   double u_a = 0.0, u_b = 0.0;          ///< specific internal energies, zero when the gas carries none

@@ -77,9 +77,10 @@ struct Adaptive {
 #pragma omp parallel for schedule(static)
     for (std::size_t a = 0; a < n; ++a) {
       double n_a = 0.0;  // eq. (A1): the particle itself left out
+      const double h_a = p.h[a], inv_h_a = 1.0 / h_a;
       for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
         const std::uint32_t b = nl.index[k];
-        n_a += kernel::W<Kernel, D>((p.x[a] - p.x[b]).norm(), 0.5 * (p.h[a] + p.h[b]));
+        n_a += kernel::W_inv_h<Kernel, D>((p.x[a] - p.x[b]).norm(), kernel::inv_h_ab(h_a, inv_h_a, p.h[b]));
       }
       N[a] = interaction_volume(p.h[a]) * n_a;
     }
@@ -117,9 +118,11 @@ struct Adaptive {
         const auto& W = *s.pair_kernel;
         for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) mean += volume_N[nl.index[k]] * W[k];
       } else {
+        const double h_a = p.h[a], inv_h_a = 1.0 / h_a;
         for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
           const std::uint32_t b = nl.index[k];
-          mean += volume_N[b] * kernel::W<Kernel, D>((p.x[a] - p.x[b]).norm(), 0.5 * (p.h[a] + p.h[b]));
+          mean += volume_N[b] *
+                  kernel::W_inv_h<Kernel, D>((p.x[a] - p.x[b]).norm(), kernel::inv_h_ab(h_a, inv_h_a, p.h[b]));
         }
       }
       const double dN = (N[a] - mean) / N[a];  // eq. (A3)
