@@ -109,18 +109,13 @@ TEST_CASE("kernel concept names what a type lacks", "[kernel]") {
   STATIC_REQUIRE(!SmoothingKernel<NoDerivative, 2>);
 }
 
-TEST_CASE("kernel: the forms of 1 / h give the same bits as the forms of h", "[kernel]") {
-  // The pair loops rely on it: reusing 1 / h_a where a neighbour shares h must not change a result.
+TEST_CASE("kernel: the pair loops' shared 1 / h is the reciprocal of h_ab to the bit", "[kernel]") {
+  // W and grad_W of h divide once and call their forms of 1 / h, so equal reciprocals give equal bits;
+  // what can differ is the reciprocal, reused from 1 / h_a or computed as 2 / (h_a + h_b).
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> h_of(0.001, 10.0), q_of(0.0, 2.1);
+  std::uniform_real_distribution<double> h_of(0.001, 10.0);
   for (int i = 0; i < 10000; ++i) {
-    const double h_a = h_of(rng), h_b = i % 2 ? h_a : h_of(rng), inv_h_a = 1.0 / h_a;
-    const double h_ab = 0.5 * (h_a + h_b), inv_h = kernel::inv_h_ab(h_a, inv_h_a, h_b);
-    REQUIRE(inv_h == 1.0 / h_ab);
-    const double r = q_of(rng) * h_ab;
-    const Vec<2> r_ab(0.6 * r, -0.8 * r);
-    REQUIRE(kernel::W_inv_h<kernel::CubicSpline, 2>(r, inv_h) == kernel::W<kernel::CubicSpline, 2>(r, h_ab));
-    REQUIRE(kernel::grad_W_inv_h<kernel::CubicSpline, 2>(r_ab, r_ab.norm(), inv_h) ==
-            kernel::grad_W<kernel::CubicSpline, 2>(r_ab, r_ab.norm(), h_ab));
+    const double h_a = h_of(rng), h_b = i % 2 ? h_a : h_of(rng);
+    REQUIRE(kernel::inv_h_ab(h_a, 1.0 / h_a, h_b) == 1.0 / (0.5 * (h_a + h_b)));
   }
 }
