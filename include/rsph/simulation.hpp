@@ -850,10 +850,12 @@ class Simulation {
     boundary::refresh_ghosts(p_);
     if constexpr (grad_h)
       for (std::size_t g = n; g < p_.size(); ++g) Omega_[g] = Omega_[p_.ghost_source[g - n]];
-    const std::size_t n_all = p_.size();
-    P_over_rho2_.resize(n_all);
+    if constexpr (has_pressure) {  // the pair loops read it only for a gas that pushes
+      const std::size_t n_all = p_.size();
+      P_over_rho2_.resize(n_all);
 #pragma omp parallel for schedule(static)
-    for (std::size_t a = 0; a < n_all; ++a) P_over_rho2_[a] = p_.P[a] / (p_.rho[a] * p_.rho[a]);
+      for (std::size_t a = 0; a < n_all; ++a) P_over_rho2_[a] = p_.P[a] / (p_.rho[a] * p_.rho[a]);
+    }
   }
 
   void prescribe_frozen(double dt) {
