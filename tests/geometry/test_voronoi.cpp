@@ -2,6 +2,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <numeric>
 #include <random>
 
@@ -102,6 +103,41 @@ TEST_CASE("the local and Boost.Polygon builders agree on every cell", "[voronoi]
     for (std::size_t a = 0; a < c.x.size(); ++a) worst = std::max(worst, std::abs(local[a] - boost[a]) / local[a]);
     CHECK(worst < 1e-9);
   }
+}
+
+TEST_CASE("a build of chosen cells visits exactly those, identical to the full build's", "[voronoi]") {
+  const auto box = box_with(Edge::periodic, Edge::reflecting);
+  const auto x = jittered(24, 0.3, 7);
+  std::vector<std::uint32_t> only;
+  for (std::uint32_t a = 3; a < x.size(); a += 7) only.push_back(a);
+  auto check = [&](auto builder) {
+    const auto all = cell_areas(builder, x, box);
+    struct Collect {
+      std::vector<double>* out;
+      std::vector<int>* visits;
+      void restart() {
+        std::fill(out->begin(), out->end(), 0.0);
+        std::fill(visits->begin(), visits->end(), 0);
+      }
+      void operator()(int, std::size_t a, const ConvexPolygon& cell) {
+        (*out)[a] = area(cell);
+        ++(*visits)[a];
+      }
+    };
+    std::vector<double> chosen(x.size(), 0.0);
+    std::vector<int> visits(x.size(), 0);
+    builder.build(x, box, {}, Collect{&chosen, &visits}, only);
+    int visited = 0;
+    for (std::size_t a = 0; a < x.size(); ++a) {
+      const bool wanted = std::binary_search(only.begin(), only.end(), static_cast<std::uint32_t>(a));
+      CHECK(visits[a] == (wanted ? 1 : 0));
+      if (wanted) CHECK(chosen[a] == all[a]);  // the same cuts in the same order: the same bits
+      visited += visits[a];
+    }
+    CHECK(visited == static_cast<int>(only.size()));
+  };
+  check(LocalVoronoi{});
+  check(BoostVoronoi{});
 }
 
 TEST_CASE("open edges close cells with a disc of the given radius", "[voronoi]") {

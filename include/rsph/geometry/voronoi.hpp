@@ -235,19 +235,28 @@ void build_widening_images(const std::vector<Point>& x, const Box<2>& box, Visit
   }
 }
 
-/// The public face of both builders: build(x, box, closing_radius, visit) runs the builder's
-/// try_build(x, box, closing_radius, margin, visit) with images widened until they suffice.
+/// The public face of both builders: build(x, box, closing_radius, visit, only) runs the builder's
+/// try_build(x, box, closing_radius, margin, visit, only) with images widened until they suffice. Every
+/// particle is a site; `only` (ascending, empty for all) names the particles whose cells are visited.
 template <class Builder>
 class WideningBuilder {
  public:
   template <class Visitor>
-  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
-             Visitor&& visit) {
+  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, Visitor&& visit,
+             std::span<const std::uint32_t> only = {}) {
     auto& self = static_cast<Builder&>(*this);
     build_widening_images(x, box, visit,
-                          [&](double margin) { return self.try_build(x, box, closing_radius, margin, visit); });
+                          [&](double margin) { return self.try_build(x, box, closing_radius, margin, visit, only); });
   }
 };
+
+/// How many cells a build visits, and the particle of the k-th: `only` or, when empty, all n.
+inline std::size_t chosen_count(std::size_t n, std::span<const std::uint32_t> only) {
+  return only.empty() ? n : only.size();
+}
+inline std::size_t chosen(std::span<const std::uint32_t> only, std::size_t k) {
+  return only.empty() ? k : static_cast<std::size_t>(only[k]);
+}
 }  // namespace detail
 
 /// Number of threads the builders use (visitors keep per-thread state).
@@ -259,7 +268,7 @@ inline int builder_threads() {
 #endif
 }
 
-/// Local half-plane builder. visit(thread, a, cell) receives each real particle's cell in coordinates
+/// Local half-plane builder. visit(thread, a, cell) receives each chosen particle's cell in coordinates
 /// relative to x[a]; particles of one thread arrive in increasing order. When periodic images turn out
 /// too few (a cell reaches past them), the builder widens them and starts again, calling
 /// visit.restart() first: a visitor must then forget what it was given.
@@ -338,19 +347,20 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
 
   template <class Visitor>
   bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
-                 double margin, Visitor& visit) {
+                 double margin, Visitor& visit, std::span<const std::uint32_t> only) {
     SitesWithImages& sites = sites_;
     detail::add_periodic_images(x, box, margin, sites);
     neighbors::CellList<2>& cells = cells_;
     const double spacing = detail::mean_spacing(x, box);
     cells.build(sites.x, spacing);
     std::atomic<bool> ok{true};
-    detail::run_parallel(sites.n_real, [&](int thread, std::size_t begin, std::size_t end) {
+    detail::run_parallel(detail::chosen_count(sites.n_real, only), [&](int thread, std::size_t begin, std::size_t end) {
       ConvexPolygon buffers[2];
       // Candidate buffers keep their size; n_near and n_far count what the current disc wrote.
       std::vector<Candidate> near, far;
       std::size_t n_near = 0, n_far = 0;
-      for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
+      for (std::size_t k = begin; k < end && ok.load(std::memory_order_relaxed); ++k) {
+        const std::size_t a = detail::chosen(only, k);
         const Point xa = sites.x[a];
         const double closing = closing_radius.empty() ? 0.0 : closing_radius[a];
         ConvexPolygon* cell = &buffers[0];  // cuts alternate between the buffers instead of copying
@@ -419,7 +429,7 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
   friend class detail::WideningBuilder<BoostVoronoi>;
   template <class Visitor>
   bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
-                 double margin, Visitor& visit) {
+                 double margin, Visitor& visit, std::span<const std::uint32_t> only) {
     SitesWithImages sites;
     detail::add_periodic_images(x, box, margin, sites);
     const std::size_t n_sites = sites.x.size();
@@ -461,9 +471,10 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
       } while (e != c.incident_edge());
     }
     std::atomic<bool> ok{true};
-    detail::run_parallel(sites.n_real, [&](int thread, std::size_t begin, std::size_t end) {
+    detail::run_parallel(detail::chosen_count(sites.n_real, only), [&](int thread, std::size_t begin, std::size_t end) {
       ConvexPolygon buffers[2];
-      for (std::size_t a = begin; a < end && ok.load(std::memory_order_relaxed); ++a) {
+      for (std::size_t k = begin; k < end && ok.load(std::memory_order_relaxed); ++k) {
+        const std::size_t a = detail::chosen(only, k);
         const Point xa = sites.x[a];
         const double closing = closing_radius.empty() ? 0.0 : closing_radius[a];
         ConvexPolygon* cell = &buffers[0];

@@ -334,7 +334,21 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
                    std::vector<std::vector<std::uint32_t>>(n_threads),
                    std::vector<std::vector<double>>(n_threads)};
   for (auto& s : hand_out.sums) s.resize(n_faces);
-  for_each_old_cell(p, box, fine, builder, grid, region, ws, hand_out);
+  // Only the old cells that may meet a face cell are built again: those whose disc of reach (from the
+  // overlap pass) touches a finest cell a face cell owns.
+  std::vector<std::uint32_t> near_faces;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const double reach = std::sqrt(ws.reach2[a]);
+    const auto r = fine.cells_touching(box, p.x[a] - Vec<2>::Constant(reach), p.x[a] + Vec<2>::Constant(reach));
+    bool meets = false;
+    for (std::int64_t i = r.lo[0]; i <= r.hi[0] && !meets; ++i)
+      for (std::int64_t j = r.lo[1]; j <= r.hi[1] && !meets; ++j) {
+        const std::int64_t fl = grid.flat({i, j});
+        meets = fl >= 0 && face_of[owner[static_cast<std::size_t>(fl)]] >= 0;
+      }
+    if (meets) near_faces.push_back(static_cast<std::uint32_t>(a));
+  }
+  for_each_old_cell(p, box, fine, builder, grid, region, ws, hand_out, near_faces);
   for (std::size_t k = 0; k < n_faces; ++k) {
     const std::size_t c = faces[k];
     cells.m[c] = 0.0;
@@ -488,6 +502,10 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
                   " must be a whole number of blocks (block size " + std::to_string(ml.spacing * ml.block_cells) + ")");
     }
   const auto grid = detail::candidate_grid(p, box, fine, params, align);
+  if (D == 2 && ml.max_level > 0)
+    ws.reach2.assign(p.n_real, 0.0);  // remap_face_cells picks the cells to build again by it
+  else
+    ws.reach2.clear();
   auto& S = detail::accumulate_overlaps(p, box, fine, builder, params, grid, region, ws);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -105,6 +106,10 @@ struct RemapWorkspace {
   std::vector<std::uint8_t> keep;
   std::vector<std::size_t> order;
   std::vector<double> closing;
+  /// Squared distance from each old particle to its cell's farthest vertex, filled by the overlap pass
+  /// only when sized to the particle count beforehand (the multi-level remap uses it to find the few
+  /// cells that meet a 2:1 face).
+  std::vector<double> reach2;
 };
 
 namespace detail {
@@ -260,7 +265,8 @@ void for_each_old_interval(const ParticleSet<1, E>& p, const Box<1>& box, const 
 /// Omega). The builder may restart (wider periodic images): action.restart() then forgets what it saw.
 template <class Lattice, class Builder, bool E, class Region, class Action>
 void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Lattice& lattice, Builder& builder,
-                       const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& workspace, Action& action) {
+                       const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& workspace, Action& action,
+                       std::span<const std::uint32_t> only = {}) {
   struct Visitor {
     const ParticleSet<2, E>* p;
     const Lattice* lattice;
@@ -351,7 +357,7 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
                   &region,
                   &action,
                   std::vector<typename Visitor::Scratch>(static_cast<std::size_t>(geometry::builder_threads()))};
-  builder.build(p.x, box, workspace.closing, visitor);
+  builder.build(p.x, box, workspace.closing, visitor, only);
 }
 
 /// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
@@ -391,11 +397,13 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
     struct AddToSums {
       std::vector<detail::Sums<2>>* sums;
       const ParticleSet<D, E>* p;
+      std::vector<double>* reach2;  ///< null unless asked for
       void restart() {
         for (auto& s : *sums) s.resize(s.m.size());
       }
-      void operator()(int thread, std::size_t a, const geometry::ConvexPolygon&,
+      void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell,
                       const std::vector<std::pair<std::size_t, double>>& ov, double cell_area) {
+        if (reach2) (*reach2)[a] = geometry::detail::max_radius2_origin(cell);
         const double e_o = [&] {
           if constexpr (E)
             return p->u[a];
@@ -405,7 +413,7 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
         (*sums)[static_cast<std::size_t>(thread)].add(ov, p->m[a], p->v[a], e_o, cell_area);
       }
     };
-    AddToSums add{&sums, &p};
+    AddToSums add{&sums, &p, workspace.reach2.size() == n_old ? &workspace.reach2 : nullptr};
     for_each_old_cell(p, box, lattice, builder, grid, region, workspace, add);
   }
 
