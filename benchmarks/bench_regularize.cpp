@@ -1,6 +1,7 @@
 // The regularization microbenchmarks: building all Voronoi cells (local half-plane builder vs
 // Boost.Polygon) and the full remap (cells, overlaps, new particles), on a jittered lattice and on a
-// lattice sheared as by Keplerian rotation. items_per_second = old particles per second.
+// lattice sheared as by Keplerian rotation, and the full remap against the jitter's amplitude (the cost of
+// disorder). items_per_second = old particles per second.
 #include "rsph/rsph.hpp"
 
 #include "bench_common.hpp"
@@ -16,11 +17,12 @@ namespace {
 
 enum Layout { jittered = 0, sheared = 1 };
 
-ParticleSet<2, true> make_set(std::int64_t n_particles, int layout) {
+/// A square lattice of about n_particles, jittered by up to +-jitter spacings per axis or sheared.
+ParticleSet<2, true> make_set(std::int64_t n_particles, int layout, double jitter = 0.3) {
   const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(n_particles))));
   const double dx = 1.0 / n;
   std::mt19937 rng(1);
-  std::uniform_real_distribution<double> u(-0.3, 0.3);
+  std::uniform_real_distribution<double> u(-0.3, 0.3), unit(-1.0, 1.0);
   ParticleSet<2, true> p;
   p.reserve(static_cast<std::size_t>(n) * n);
   for (int j = 0; j < n; ++j) {
@@ -28,9 +30,9 @@ ParticleSet<2, true> make_set(std::int64_t n_particles, int layout) {
     // Keplerian-like shear: rows slide by an amount that grows with y (several spacings between rows)
     const double shift = layout == sheared ? 7.3 * y * y : 0.0;
     for (int i = 0; i < n; ++i) {
-      double x = (i + 0.5) * dx + shift + (layout == jittered ? u(rng) * dx : 0.0);
+      double x = (i + 0.5) * dx + shift + (layout == jittered ? jitter * unit(rng) * dx : 0.0);
       x -= std::floor(x);
-      p.add(dx * dx, Vec<2>(x, std::clamp(y + (layout == jittered ? u(rng) * dx : 0.0), 0.0, 1.0)),
+      p.add(dx * dx, Vec<2>(x, std::clamp(y + (layout == jittered ? jitter * unit(rng) * dx : 0.0), 0.0, 1.0)),
             Vec<2>(u(rng), u(rng)), 1.2 * dx, 1.0);
     }
   }
@@ -58,48 +60,22 @@ void BM_cells(benchmark::State& state) {
   state.SetComplexityN(static_cast<std::int64_t>(p.n_real));
 }
 
-void BM_remap(benchmark::State& state) {
-  bench::use_threads(state);
-  const auto p0 = make_set(state.range(0), static_cast<int>(state.range(1)));
-  const double dx = 1.0 / std::lround(std::sqrt(static_cast<double>(p0.n_real)));
+double spacing_of(const ParticleSet<2, true>& p) { return 1.0 / std::lround(std::sqrt(static_cast<double>(p.n_real))); }
+
+/// Times remaps of p0 onto `lattice`; returns the new particle count.
+template <class Lattice>
+std::size_t time_remaps(benchmark::State& state, const ParticleSet<2, true>& p0, Lattice& lattice) {
   // As in a run: the builder and the workspace persist from remap to remap, and so does the particle
   // storage (copy-assigned, not reallocated).
   geometry::LocalVoronoi builder;
   regularize::RemapWorkspace<2> workspace;
-  auto p = p0;
-  auto remap = [&] {
-    return regularize::remap_onto_lattice(p, domain(), lattice::Square{dx}, builder, regularize::RemapParams{},
-                                          region::Unbounded{}, &workspace);
-  };
-  remap();  // untimed: the first remap faults in the storage every later one reuses
-  for (auto _ : state) {
-    state.PauseTiming();
-    p = p0;
-    state.ResumeTiming();
-    const auto stats = remap();
-    benchmark::DoNotOptimize(stats.n_after);
-  }
-  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p0.n_real));
-  state.SetComplexityN(static_cast<std::int64_t>(p0.n_real));
-}
-
-// The same remap onto a two-level lattice: level-0 spacing 2 Delta, the left half refined to Delta, so the
-// overlaps are taken on the finest lattice everywhere and summed into the coarse cells.
-void BM_remap_two_levels(benchmark::State& state) {
-  bench::use_threads(state);
-  const auto p0 = make_set(state.range(0), static_cast<int>(state.range(1)));
-  const double dx = 1.0 / std::lround(std::sqrt(static_cast<double>(p0.n_real)));
-  geometry::LocalVoronoi builder;
-  auto left_half = refine::region<2>([](const Vec<2>& lo, const Vec<2>&) { return lo[0] < 0.5; }, 1);
-  lattice::MultiLevel<2, decltype(left_half)> ml(2.0 * dx, 1, 1, left_half);
-  regularize::RemapWorkspace<2> workspace;
   std::size_t n_after = 0;
   auto p = p0;
   auto remap = [&] {
-    return regularize::remap_onto_lattice(p, domain(), ml, builder, regularize::RemapParams{}, region::Unbounded{},
+    return regularize::remap_onto_lattice(p, domain(), lattice, builder, regularize::RemapParams{}, region::Unbounded{},
                                           &workspace);
   };
-  remap();  // untimed, as above
+  remap();  // untimed: the first remap faults in the storage every later one reuses
   for (auto _ : state) {
     state.PauseTiming();
     p = p0;
@@ -107,9 +83,34 @@ void BM_remap_two_levels(benchmark::State& state) {
     n_after = remap().n_after;
     benchmark::DoNotOptimize(n_after);
   }
-  state.counters["new_particles"] = static_cast<double>(n_after);
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p0.n_real));
   state.SetComplexityN(static_cast<std::int64_t>(p0.n_real));
+  return n_after;
+}
+
+void BM_remap(benchmark::State& state) {
+  bench::use_threads(state);
+  const auto p0 = make_set(state.range(0), static_cast<int>(state.range(1)));
+  lattice::Square square{spacing_of(p0)};
+  time_remaps(state, p0, square);
+}
+
+// Arguments: {particles, jitter in hundredths of a spacing, threads}.
+void BM_remap_disorder(benchmark::State& state) {
+  bench::use_threads(state);
+  const auto p0 = make_set(state.range(0), jittered, static_cast<double>(state.range(1)) / 100.0);
+  lattice::Square square{spacing_of(p0)};
+  time_remaps(state, p0, square);
+}
+
+// The same remap onto a two-level lattice: level-0 spacing 2 Delta, the left half refined to Delta, so the
+// overlaps are taken on the finest lattice everywhere and summed into the coarse cells.
+void BM_remap_two_levels(benchmark::State& state) {
+  bench::use_threads(state);
+  const auto p0 = make_set(state.range(0), static_cast<int>(state.range(1)));
+  auto left_half = refine::region<2>([](const Vec<2>& lo, const Vec<2>&) { return lo[0] < 0.5; }, 1);
+  lattice::MultiLevel<2, decltype(left_half)> ml(2.0 * spacing_of(p0), 1, 1, left_half);
+  state.counters["new_particles"] = static_cast<double>(time_remaps(state, p0, ml));
 }
 
 // One family per (layout, threads), so each complexity fit sees one scaling curve in N.
@@ -133,6 +134,12 @@ int main(int argc, char** argv) {
   register_family("cells_boost_polygon", BM_cells<geometry::BoostVoronoi>);
   register_family("remap", BM_remap);
   register_family("remap_two_levels", BM_remap_two_levels);
+  for (int t : {1, 0}) {
+    auto* b = benchmark::RegisterBenchmark(t == 1 ? "remap_disorder/1thread" : "remap_disorder/allthreads",
+                                           BM_remap_disorder);
+    for (std::int64_t jitter : {0, 5, 10, 15, 20, 30, 40}) b->Args({100000, jitter, t});
+    b->Unit(benchmark::kMillisecond)->UseRealTime();
+  }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
