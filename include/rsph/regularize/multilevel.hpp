@@ -336,6 +336,7 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
   for (auto& s : hand_out.sums) s.resize(n_faces);
   // Only the old cells that may meet a face cell are built again: those whose disc of reach (from the
   // overlap pass) touches a finest cell a face cell owns.
+  require(ws.reach2.size() == p.n_real, "multi-level remap: the overlap pass did not record the cells' reach");
   std::vector<std::uint32_t> near_faces;
   for (std::size_t a = 0; a < p.n_real; ++a) {
     const double reach = std::sqrt(ws.reach2[a]);
