@@ -349,7 +349,8 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
       }
     if (meets) near_faces.push_back(static_cast<std::uint32_t>(a));
   }
-  for_each_old_cell(p, box, fine, builder, grid, region, ws, hand_out, near_faces);
+  if (!near_faces.empty())  // (an empty list would mean every cell)
+    for_each_old_cell(p, box, fine, builder, grid, region, ws, hand_out, near_faces);
   for (std::size_t k = 0; k < n_faces; ++k) {
     const std::size_t c = faces[k];
     cells.m[c] = 0.0;
