@@ -185,6 +185,7 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
   const std::size_t n_faces = faces.size();
   std::vector<ConvexPolygon> polygon(n_faces);
   std::vector<Vec<2>> face_site(n_faces);
+  std::vector<geometry::Bounds> face_bounds(n_faces);  // relative to the site: a quick test before clipping
   std::vector<std::vector<std::uint32_t>> nearby(n_faces);
   for (std::size_t k = 0; k < n_faces; ++k) {
     const std::size_t c = faces[k];
@@ -229,6 +230,7 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
     }
     while (out.n > 1 && (out[0] - out[out.n - 1]).squaredNorm() <= 1e-24 * dx * dx) --out.n;
     face_site[k] = xc;
+    face_bounds[k] = geometry::bounds(out);
     volume[c] = geometry::area(*cell);
   }
   for (auto& list : nearby) {
@@ -253,6 +255,7 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
     const std::vector<std::int32_t>* face_of;
     const std::vector<ConvexPolygon>* polygon;
     const std::vector<Vec<2>>* face_site;
+    const std::vector<geometry::Bounds>* face_bounds;
     const std::vector<std::vector<std::uint32_t>>* nearby;
     std::vector<FaceSums> sums;
     std::vector<std::vector<std::uint32_t>> candidates;
@@ -285,6 +288,7 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
       auto& om = omegas[static_cast<std::size_t>(thread)];
       om.assign(cand.size(), 0.0);
       double A_poly = 0.0;
+      const geometry::Bounds cb = geometry::bounds(cell);
       for (std::size_t i = 0; i < cand.size(); ++i) {
         const std::size_t k = cand[i];
         Vec<2> d = (*face_site)[k] - xo;  // nearest periodic image of the face site
@@ -293,6 +297,9 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
             const double L = box->hi[ax] - box->lo[ax];
             d[ax] -= L * std::round(d[ax] / L);
           }
+        const geometry::Bounds& wb = (*face_bounds)[k];
+        if (((wb.lo + d).array() > cb.hi.array()).any() || ((wb.hi + d).array() < cb.lo.array()).any())
+          continue;  // apart: no overlap, and no clip needed to say so
         ConvexPolygon window = (*polygon)[k];
         for (int v = 0; v < window.n; ++v) window.v[static_cast<std::size_t>(v)] += d;
         om[i] = geometry::area(geometry::clip_convex(cell, window));
@@ -329,6 +336,7 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
                    &face_of,
                    &polygon,
                    &face_site,
+                   &face_bounds,
                    &nearby,
                    std::vector<FaceSums>(n_threads),
                    std::vector<std::vector<std::uint32_t>>(n_threads),
@@ -337,15 +345,17 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
   // Only the old cells that may meet a face cell are built again: those whose disc of reach (from the
   // overlap pass) touches a finest cell a face cell owns.
   require(ws.reach2.size() == p.n_real, "multi-level remap: the overlap pass did not record the cells' reach");
+  std::vector<std::uint8_t> in_face(grid.n_cells);  // per finest cell: owned by a face cell
+  for (std::size_t f = 0; f < grid.n_cells; ++f) in_face[f] = face_of[owner[f]] >= 0;
   std::vector<std::uint32_t> near_faces;
   for (std::size_t a = 0; a < p.n_real; ++a) {
     const double reach = std::sqrt(ws.reach2[a]);
     const auto r = fine.cells_touching(box, p.x[a] - Vec<2>::Constant(reach), p.x[a] + Vec<2>::Constant(reach));
     bool meets = false;
-    for (std::int64_t i = r.lo[0]; i <= r.hi[0] && !meets; ++i)
-      for (std::int64_t j = r.lo[1]; j <= r.hi[1] && !meets; ++j) {
+    for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i)
+      for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j) {
         const std::int64_t fl = grid.flat({i, j});
-        meets = fl >= 0 && face_of[owner[static_cast<std::size_t>(fl)]] >= 0;
+        meets |= fl >= 0 && in_face[static_cast<std::size_t>(fl)];
       }
     if (meets) near_faces.push_back(static_cast<std::uint32_t>(a));
   }
