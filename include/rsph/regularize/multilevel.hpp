@@ -344,12 +344,12 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
   for (auto& s : hand_out.sums) s.resize(n_faces);
   // Only the old cells that may meet a face cell are built again: those whose disc of reach (from the
   // overlap pass) touches a finest cell a face cell owns.
-  require(ws.reach2.size() == p.n_real, "multi-level remap: the overlap pass did not record the cells' reach");
+  require(ws.reach.size() == p.n_real, "multi-level remap: the overlap pass did not record the cells' reach");
   std::vector<std::uint8_t> in_face(grid.n_cells);  // per finest cell: owned by a face cell
   for (std::size_t f = 0; f < grid.n_cells; ++f) in_face[f] = face_of[owner[f]] >= 0;
   std::vector<std::uint32_t> near_faces;
   for (std::size_t a = 0; a < p.n_real; ++a) {
-    const double reach = std::sqrt(ws.reach2[a]);
+    const double reach = ws.reach[a];
     const auto r = fine.cells_touching(box, p.x[a] - Vec<2>::Constant(reach), p.x[a] + Vec<2>::Constant(reach));
     bool meets = false;
     for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i)
@@ -514,11 +514,8 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
                   " must be a whole number of blocks (block size " + std::to_string(ml.spacing * ml.block_cells) + ")");
     }
   const auto grid = detail::candidate_grid(p, box, fine, params, align);
-  if (D == 2 && ml.max_level > 0)
-    ws.reach2.assign(p.n_real, 0.0);  // remap_face_cells picks the cells to build again by it
-  else
-    ws.reach2.clear();
-  auto& S = detail::accumulate_overlaps(p, box, fine, builder, params, grid, region, ws);
+  // remap_face_cells picks the old cells to build again by their reach
+  auto& S = detail::accumulate_overlaps(p, box, fine, builder, params, grid, region, ws, ml.max_level > 0);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
 

@@ -106,10 +106,9 @@ struct RemapWorkspace {
   std::vector<std::uint8_t> keep;
   std::vector<std::size_t> order;
   std::vector<double> closing;
-  /// Squared distance from each old particle to its cell's farthest vertex, filled by the overlap pass
-  /// only when sized to the particle count beforehand (the multi-level remap uses it to find the few
-  /// cells that meet a 2:1 face).
-  std::vector<double> reach2;
+  /// Distance from each old particle to its cell's farthest vertex, when the overlap pass is asked for it
+  /// (the multi-level remap finds the few cells that meet a 2:1 face by it).
+  std::vector<double> reach;
 };
 
 namespace detail {
@@ -362,11 +361,12 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
 
 /// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
 /// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
-/// The sums land in workspace.sums[0].
+/// The sums land in workspace.sums[0]. With `record_reach` (2D), workspace.reach receives each old cell's
+/// farthest vertex distance.
 template <class Lattice, class Builder, int D, bool E, class Region>
 Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
                              const RemapParams& params, const CellGrid<D>& grid, const Region& region,
-                             RemapWorkspace<D>& workspace) {
+                             RemapWorkspace<D>& workspace, bool record_reach = false) {
   static_assert(check_closing_region<Region>());
   static_assert(D == 2 || !Region::clips, "closing regions are two-dimensional");
   const std::size_t n_old = p.n_real;
@@ -397,13 +397,13 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
     struct AddToSums {
       std::vector<detail::Sums<2>>* sums;
       const ParticleSet<D, E>* p;
-      std::vector<double>* reach2;  ///< null unless asked for
+      std::vector<double>* reach;  ///< null unless asked for
       void restart() {
         for (auto& s : *sums) s.resize(s.m.size());
       }
       void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell,
                       const std::vector<std::pair<std::size_t, double>>& ov, double cell_area) {
-        if (reach2) (*reach2)[a] = geometry::detail::max_radius2_origin(cell);
+        if (reach) (*reach)[a] = geometry::max_radius(cell, geometry::Point::Zero());
         const double e_o = [&] {
           if constexpr (E)
             return p->u[a];
@@ -413,7 +413,8 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
         (*sums)[static_cast<std::size_t>(thread)].add(ov, p->m[a], p->v[a], e_o, cell_area);
       }
     };
-    AddToSums add{&sums, &p, workspace.reach2.size() == n_old ? &workspace.reach2 : nullptr};
+    if (record_reach) workspace.reach.resize(n_old);
+    AddToSums add{&sums, &p, record_reach ? &workspace.reach : nullptr};
     for_each_old_cell(p, box, lattice, builder, grid, region, workspace, add);
   }
 
