@@ -1,7 +1,8 @@
 // The regularization microbenchmarks: building all Voronoi cells (local half-plane builder vs
 // Boost.Polygon) and the full remap (cells, overlaps, new particles), on a jittered lattice and on a
 // lattice sheared as by Keplerian rotation, and the full remap against the jitter's amplitude (the cost of
-// disorder). items_per_second = old particles per second.
+// disorder), and a Keplerian disk with open edges as the planet-disk test remaps it. items_per_second = old
+// particles per second.
 #include "rsph/rsph.hpp"
 
 #include "bench_common.hpp"
@@ -62,19 +63,18 @@ void BM_cells(benchmark::State& state) {
 
 double spacing_of(const ParticleSet<2, true>& p) { return 1.0 / std::lround(std::sqrt(static_cast<double>(p.n_real))); }
 
-/// Times remaps of p0 onto `lattice`; returns the new particle count.
-template <class Lattice>
-std::size_t time_remaps(benchmark::State& state, const ParticleSet<2, true>& p0, Lattice& lattice) {
+/// Times remaps of p0 onto `lattice` in `box`, cells closed by `region`; returns the new particle count.
+template <class Lattice, bool E, class Region = region::Unbounded>
+std::size_t time_remaps(benchmark::State& state, const ParticleSet<2, E>& p0, Lattice& lattice,
+                        const Box<2>& box = domain(), const regularize::RemapParams& params = {},
+                        const Region& region = {}) {
   // As in a run: the builder and the workspace persist from remap to remap, and so does the particle
   // storage (copy-assigned, not reallocated).
   geometry::LocalVoronoi builder;
   regularize::RemapWorkspace<2> workspace;
   std::size_t n_after = 0;
   auto p = p0;
-  auto remap = [&] {
-    return regularize::remap_onto_lattice(p, domain(), lattice, builder, regularize::RemapParams{}, region::Unbounded{},
-                                          &workspace);
-  };
+  auto remap = [&] { return regularize::remap_onto_lattice(p, box, lattice, builder, params, region, &workspace); };
   remap();  // untimed: the first remap faults in the storage every later one reuses
   for (auto _ : state) {
     state.PauseTiming();
@@ -101,6 +101,36 @@ void BM_remap_disorder(benchmark::State& state) {
   const auto p0 = make_set(state.range(0), jittered, static_cast<double>(state.range(1)) / 100.0);
   lattice::Square square{spacing_of(p0)};
   time_remaps(state, p0, square);
+}
+
+// A disk as the planet-disk test remaps it: a square lattice in the annulus 0.4 <= r <= 2.5, rotated at the
+// Keplerian angular velocity r^-1.5 for `range(1)` tenths of a time unit (at the test's usual interval of
+// about one unit, neighbouring rows have slid by 1.5 spacings), isothermal, open edges, cells closed at
+// 0.75 spacings and by the annulus. Arguments: {particles, rotation time in tenths, threads}.
+void BM_remap_disk(benchmark::State& state) {
+  bench::use_threads(state);
+  constexpr double r_in = 0.4, r_out = 2.5, h_over_dx = 1.4;
+  const double dx =
+      std::sqrt(3.14159265358979323846 * (r_out * r_out - r_in * r_in) / static_cast<double>(state.range(0)));
+  const double t = static_cast<double>(state.range(1)) / 10.0;
+  ParticleSet<2, false> p0;
+  const auto n_side = static_cast<int>(std::ceil(r_out / dx));
+  for (int j = -n_side; j < n_side; ++j)
+    for (int i = -n_side; i < n_side; ++i) {
+      const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
+      const double r = x.norm();
+      if (r < r_in || r > r_out) continue;
+      const double omega = std::pow(r, -1.5), phi = omega * t;
+      const Vec<2> rotated(std::cos(phi) * x.x() - std::sin(phi) * x.y(),
+                           std::sin(phi) * x.x() + std::cos(phi) * x.y());
+      p0.add(dx * dx, rotated, omega * Vec<2>(-rotated.y(), rotated.x()), h_over_dx * dx);
+    }
+  Box<2> open;
+  open.edge = {Edge::open, Edge::open};
+  lattice::Square square{dx};
+  state.counters["new_particles"] = static_cast<double>(
+      time_remaps(state, p0, square, open, regularize::RemapParams{h_over_dx, 0.5, 0.75 / h_over_dx, 1e-6},
+                  region::Annulus{r_in, r_out}));
 }
 
 // The same remap onto a two-level lattice: level-0 spacing 2 Delta, the left half refined to Delta, so the
@@ -139,6 +169,11 @@ int main(int argc, char** argv) {
                                            BM_remap_disorder);
     for (std::int64_t jitter : {0, 5, 10, 15, 20, 30, 40}) b->Args({100000, jitter, t});
     b->Unit(benchmark::kMillisecond)->UseRealTime();
+  }
+  for (int t : {1, 0}) {
+    auto* b = benchmark::RegisterBenchmark(t == 1 ? "remap_disk/1thread" : "remap_disk/allthreads", BM_remap_disk);
+    for (std::int64_t n : {10000, 100000, 1000000}) b->Args({n, 10, t});
+    b->Unit(benchmark::kMillisecond)->UseRealTime()->Complexity(benchmark::oN);
   }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;

@@ -153,6 +153,48 @@ TEST_CASE("open edges close cells with a disc of the given radius", "[voronoi]")
   }
 }
 
+TEST_CASE("cells reaching past the closing radius are cut by exactly the closing square and 32-gon", "[voronoi]") {
+  const auto box = box_with(Edge::open, Edge::open);
+  // The oracle: the square circumscribing the closing disc, cut by every side of the 32-gon.
+  auto closed = [](ConvexPolygon cell, double R) {
+    clip_halfplane(cell, Point(1, 0), R);
+    clip_halfplane(cell, Point(-1, 0), R);
+    clip_halfplane(cell, Point(0, 1), R);
+    clip_halfplane(cell, Point(0, -1), R);
+    for (int k = 0; k < 32; ++k) {
+      const double phi = 2.0 * 3.14159265358979323846 * (k + 0.5) / 32.0;
+      clip_halfplane(cell, Point(std::cos(phi), std::sin(phi)), R);
+    }
+    return cell;
+  };
+  SECTION("an isolated particle") {
+    const double R = 0.3;
+    const auto a = areas_of<LocalVoronoi>({Point(0.2, -0.1)}, box, {R});
+    const double expected = area(closed(ConvexPolygon::rectangle(-1, -1, 1, 1), R));
+    CHECK(a[0] == Approx(expected).epsilon(1e-13));
+    CHECK(expected == Approx(0.283570).epsilon(1e-5));  // 32 R^2 tan(pi/32) = 0.283655 less the 8 corners
+  }
+  SECTION("a jittered patch closed at 0.75 spacings, against cutting every cell by all sides") {
+    auto x = jittered(12, 0.3, 9);
+    const double dx = 1.0 / 12.0, R = 0.75 * dx;
+    const std::vector<double> closing(x.size(), R);
+    const auto local = areas_of<LocalVoronoi>(x, box, closing);
+    const auto boost = areas_of<BoostVoronoi>(x, box, closing);
+    int closed_inside = 0;  // cells of the patch's interior that the closing cut
+    for (std::size_t a = 0; a < x.size(); ++a) {
+      ConvexPolygon cell = ConvexPolygon::rectangle(-4.0, -4.0, 4.0, 4.0);
+      for (std::size_t b = 0; b < x.size(); ++b)
+        if (b != a) clip_halfplane(cell, x[b] - x[a], 0.5 * (x[b] - x[a]).squaredNorm());
+      const double open_area = area(cell), closed_area = area(closed(cell, R));
+      CHECK(local[a] == Approx(closed_area).epsilon(1e-12));
+      CHECK(boost[a] == Approx(closed_area).epsilon(1e-12));
+      const bool interior = std::min({x[a].x(), x[a].y(), 1.0 - x[a].x(), 1.0 - x[a].y()}) > 2.0 * dx;
+      closed_inside += interior && closed_area < open_area * (1.0 - 1e-9);
+    }
+    CHECK(closed_inside > 10);
+  }
+}
+
 TEST_CASE("coincident particles and particles outside the domain are refused", "[voronoi]") {
   auto x = jittered(8, 0.2, 6);
   const auto box = box_with(Edge::periodic, Edge::periodic);

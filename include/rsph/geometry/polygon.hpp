@@ -106,10 +106,17 @@ inline void clip_halfplane(const ConvexPolygon& in, const Point& normal, double 
   detail::clip_by_distances(in, s.data(), out);
 }
 
-/// Clips to the half-plane in place.
+/// Clips to the half-plane in place; a polygon no vertex of which lies beyond is left as it is, uncopied.
 inline void clip_halfplane(ConvexPolygon& p, const Point& normal, double offset) {
+  std::array<double, ConvexPolygon::capacity> s;
+  bool cuts = p.n < 3;
+  for (int i = 0; i < p.n; ++i) {
+    s[static_cast<std::size_t>(i)] = normal.dot(p[i]) - offset;
+    cuts |= s[static_cast<std::size_t>(i)] > 0.0;
+  }
+  if (!cuts) return;
   ConvexPolygon tmp;
-  clip_halfplane(p, normal, offset, tmp);
+  detail::clip_by_distances(p, s.data(), tmp);
   p = tmp;
 }
 
