@@ -671,32 +671,46 @@ class Simulation {
             }
           }
         }
-        std::vector<double> diagonal(m), component(m), mean(anchored.size()), count(anchored.size());
-        for (int axis = 0; axis < D; ++axis) {
-          const auto bit = std::uint8_t(1u << axis);
-          auto sign_of = [&](std::uint32_t b) { return b >= n && (ghost_flips_[b - n] & bit) ? -1.0 : 1.0; };
-#pragma omp parallel for schedule(static)
-          for (std::size_t i = 0; i < m; ++i) {
-            const std::uint32_t a = band_members_[i];
-            double d = 0.0;
-            for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
-              const std::uint32_t b = nl_.index[k];
-              d += pair_w_[k] * (source_of(b) == a ? 1.0 - sign_of(b) : 1.0);
+        // The band's matrix: row i holds, for each pair with a band member b that is not i's own mirror
+        // image, b's band index and per axis its weight times the sign of b's mirroring; the rest of each row
+        // lands on the diagonal. Iterating on it instead of the neighbour list skips the pairs leaving the
+        // band and the ghost look-ups in every product.
+        band_row_.assign(m + 1, 0);
+        band_col_.clear();
+        for (auto& c : band_coef_) c.clear();
+        std::array<std::vector<double>, D> diagonal;
+        for (auto& d : diagonal) d.assign(m, 0.0);
+        for (std::size_t i = 0; i < m; ++i) {
+          const std::uint32_t a = band_members_[i];
+          for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
+            const double w = pair_w_[k];
+            if (w == 0.0) continue;
+            const std::uint32_t b = nl_.index[k];
+            const std::uint8_t flips = b >= n ? ghost_flips_[b - n] : std::uint8_t(0);
+            if (source_of(b) == a) {  // a's mirror image: w (psi_a - s psi_a)
+              for (int axis = 0; axis < D; ++axis)
+                diagonal[static_cast<std::size_t>(axis)][i] += (flips & (1u << axis)) ? 2.0 * w : 0.0;
+              continue;
             }
-            diagonal[i] = d;
+            band_col_.push_back(static_cast<std::uint32_t>(band_index_[source_of(b)]));
+            for (int axis = 0; axis < D; ++axis) {
+              diagonal[static_cast<std::size_t>(axis)][i] += w;
+              band_coef_[static_cast<std::size_t>(axis)].push_back((flips & (1u << axis)) ? -w : w);
+            }
           }
+          band_row_[i + 1] = band_col_.size();
+        }
+        std::vector<double> component(m), mean(anchored.size()), count(anchored.size());
+        for (int axis = 0; axis < D; ++axis) {
+          const auto& diag = diagonal[static_cast<std::size_t>(axis)];
+          const auto& coef = band_coef_[static_cast<std::size_t>(axis)];
           auto apply = [&](const std::vector<double>& in, std::vector<double>& out) {
             out.resize(m);
 #pragma omp parallel for schedule(static)
             for (std::size_t i = 0; i < m; ++i) {
-              const std::uint32_t a = band_members_[i];
-              double y = 0.0;
-              for (auto k = nl_.offset[a]; k < nl_.offset[a + 1]; ++k) {
-                if (pair_w_[k] == 0.0) continue;
-                const std::uint32_t b = nl_.index[k];
-                y += pair_w_[k] * (in[i] - sign_of(b) * in[static_cast<std::size_t>(band_index_[source_of(b)])]);
-              }
-              out[i] = y;
+              double off = 0.0;
+              for (std::size_t e = band_row_[i]; e < band_row_[i + 1]; ++e) off += coef[e] * in[band_col_[e]];
+              out[i] = diag[i] * in[i] - off;
             }
           };
           auto& rhs = psi_rhs_[static_cast<std::size_t>(axis)];
@@ -711,7 +725,7 @@ class Simulation {
             if (!anchored[c][static_cast<std::size_t>(axis)]) rhs[i] -= mean[c] / count[c];
           }
           for (std::size_t i = 0; i < m; ++i) component[i] = fresh ? 0.0 : psi_old[band_members_[i]][axis];
-          const CgResult res = conjugate_gradient(apply, diagonal, rhs, component, term.tolerance, term.max_iterations);
+          const CgResult res = conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations);
           psi_solve_.iterations += res.iterations;
           psi_solve_.relative_residual = std::max(psi_solve_.relative_residual, res.relative_residual);
           psi_solve_.converged = psi_solve_.converged && res.converged;
@@ -989,6 +1003,9 @@ class Simulation {
   std::array<std::vector<double>, D> psi_rhs_;
   std::vector<std::uint8_t> ghost_flips_, band_, band_grow_;
   std::vector<std::int32_t> band_index_, piece_;
+  std::vector<std::size_t> band_row_;             ///< the psi solve's band matrix (CSR): row offsets,
+  std::vector<std::uint32_t> band_col_;           ///< band index of each entry,
+  std::array<std::vector<double>, D> band_coef_;  ///< and its signed weight per axis
   std::vector<std::uint32_t> band_members_;
   CgResult psi_solve_;
   std::uint64_t psi_solves_ = 0, psi_iterations_ = 0;
