@@ -7,6 +7,7 @@
 
 #include <array>
 #include <chrono>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -109,6 +110,24 @@ io::Json phase_json(const Times& t) {
   j.set("integrate", t.integrate).set("regularization", t.regularization);
   return j;
 }
+
+/// The psi solves of consistent gradients (physics::ConsistentGradient) and their conjugate-gradient
+/// iterations, taken from a simulation that has them; written to summary.json only then.
+struct GradientSolves {
+  bool present = false;
+  std::uint64_t solves = 0, iterations = 0;
+
+  template <class Sim>
+  static GradientSolves of(const Sim& sim) {
+    if constexpr (requires { sim.gradient_solves(); })
+      return {true, sim.gradient_solves(), sim.gradient_solve_iterations()};
+    else
+      return {};
+  }
+  void write_to(io::Json& j) const {
+    if (present) j.set("gradient_solves", solves).set("gradient_solve_iterations", iterations);
+  }
+};
 
 /// Particles per resolution level from a regularization log: the counts the last regularization left
 /// and their average over steps (each regularization's counts weighted by the steps until the next).

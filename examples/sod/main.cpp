@@ -93,10 +93,7 @@ int run(const Options& opt, Sim sim) {
     summary.set("levels", ex::level_counts(sim.regularizer().log(), sim.steps()));
     summary.set("max_level", opt.rsph.refinement.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
   }
-  if constexpr (requires { sim.gradient_solves(); }) {
-    summary.set("gradient_solves", sim.gradient_solves());
-    summary.set("gradient_solve_iterations", sim.gradient_solve_iterations());
-  }
+  ex::GradientSolves::of(sim).write_to(summary);
   summary.write(dir / "summary.json");
   fmt::print(
       "rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "

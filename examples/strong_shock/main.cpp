@@ -56,15 +56,12 @@ int main(int argc, char** argv) {
       if (!common.quiet) progress.update(sim.time(), sim.steps());
     };
     io::Json levels;
-    std::uint64_t gradient_solves = 0, gradient_solve_iterations = 0;
+    ex::GradientSolves gradient;
     auto on_end = [&](const auto& sim) {
       io::write_snapshot(dir / io::snapshot_name(0), sim.particles(), sim.time(), sim.steps());
       if constexpr (requires { sim.regularizer().lattice().max_level; })
         levels = ex::level_counts(sim.regularizer().log(), sim.steps());
-      if constexpr (requires { sim.gradient_solves(); }) {
-        gradient_solves = sim.gradient_solves();
-        gradient_solve_iterations = sim.gradient_solve_iterations();
-      }
+      gradient = ex::GradientSolves::of(sim);
     };
     scenes::ShockRun r;
     if (method == "rsph" && s.refinement.levels > 0)
@@ -98,10 +95,8 @@ int main(int argc, char** argv) {
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
     summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
     if (method == "rsph") summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels));
-    if (method == "rsph" && s.refinement.levels > 0) {  // none on a uniform lattice
-      summary.set("levels", levels);
-      summary.set("gradient_solves", gradient_solves).set("gradient_solve_iterations", gradient_solve_iterations);
-    }
+    if (method == "rsph" && s.refinement.levels > 0) summary.set("levels", levels);  // none on a uniform lattice
+    gradient.write_to(summary);
     summary.write(dir / "summary.json");
     fmt::print(
         "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"
