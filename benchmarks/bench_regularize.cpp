@@ -9,6 +9,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <numbers>
 #include <random>
 #include <string>
 
@@ -110,8 +111,7 @@ void BM_remap_disorder(benchmark::State& state) {
 void BM_remap_disk(benchmark::State& state) {
   bench::use_threads(state);
   constexpr double r_in = 0.4, r_out = 2.5, h_over_dx = 1.4;
-  const double dx =
-      std::sqrt(3.14159265358979323846 * (r_out * r_out - r_in * r_in) / static_cast<double>(state.range(0)));
+  const double dx = std::sqrt(std::numbers::pi * (r_out * r_out - r_in * r_in) / static_cast<double>(state.range(0)));
   const double t = static_cast<double>(state.range(1)) / 10.0;
   ParticleSet<2, false> p0;
   const auto n_side = static_cast<int>(std::ceil(r_out / dx));

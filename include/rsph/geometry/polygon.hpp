@@ -106,18 +106,30 @@ inline void clip_halfplane(const ConvexPolygon& in, const Point& normal, double 
   detail::clip_by_distances(in, s.data(), out);
 }
 
-/// Clips to the half-plane in place; a polygon no vertex of which lies beyond is left as it is, uncopied.
-inline void clip_halfplane(ConvexPolygon& p, const Point& normal, double offset) {
+namespace detail {
+/// Cuts `in` by the half-plane normal . x <= offset into `out` (Sutherland-Hodgman on distances computed
+/// once). Returns false, leaving `out` alone, when no vertex lies beyond it: most candidate cuts of a
+/// Voronoi cell miss it.
+inline bool cut_halfplane(const ConvexPolygon& in, const Point& normal, double offset, ConvexPolygon& out) {
   std::array<double, ConvexPolygon::capacity> s;
-  bool cuts = p.n < 3;
-  for (int i = 0; i < p.n; ++i) {
-    s[static_cast<std::size_t>(i)] = normal.dot(p[i]) - offset;
+  bool cuts = false;
+  for (int i = 0; i < in.n; ++i) {
+    s[static_cast<std::size_t>(i)] = normal.dot(in[i]) - offset;
     cuts |= s[static_cast<std::size_t>(i)] > 0.0;
   }
-  if (!cuts) return;
+  if (cuts) clip_by_distances(in, s.data(), out);
+  return cuts;
+}
+}  // namespace detail
+
+/// Clips to the half-plane in place; a polygon no vertex of which lies beyond is left as it is, uncopied.
+inline void clip_halfplane(ConvexPolygon& p, const Point& normal, double offset) {
+  if (p.n < 3) {  // degenerate: clipping empties it
+    p.clear();
+    return;
+  }
   ConvexPolygon tmp;
-  detail::clip_by_distances(p, s.data(), tmp);
-  p = tmp;
+  if (detail::cut_halfplane(p, normal, offset, tmp)) p = tmp;
 }
 
 /// Axis-aligned bounding box.

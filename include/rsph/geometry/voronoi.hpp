@@ -34,6 +34,7 @@
 #include <cstdint>
 #include <exception>
 #include <limits>
+#include <numbers>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -107,20 +108,6 @@ inline ConvexPolygon initial_cell(const Point& xa, const Box<2>& box, double mar
   return ConvexPolygon::rectangle(lo[0], lo[1], hi[0], hi[1]);
 }
 
-/// Cuts `in` (relative to x_a) by the half-plane normal . y <= offset into `out` (Sutherland-Hodgman on
-/// distances computed once). Returns false, leaving `out` alone, when no vertex lies beyond it: most
-/// candidates miss the cell.
-inline bool cut_halfplane(const ConvexPolygon& in, const Point& normal, double offset, ConvexPolygon& out) {
-  std::array<double, ConvexPolygon::capacity> s;
-  bool cuts = false;
-  for (int i = 0; i < in.n; ++i) {
-    s[static_cast<std::size_t>(i)] = normal.dot(in[i]) - offset;
-    cuts |= s[static_cast<std::size_t>(i)] > 0.0;
-  }
-  if (cuts) clip_by_distances(in, s.data(), out);
-  return cuts;
-}
-
 /// The bisector with a site at relative position d keeps |y| <= |y - d|, i.e. d . y <= |d|^2 / 2.
 inline bool cut_by_bisector(const ConvexPolygon& in, const Point& d, ConvexPolygon& out) {
   return cut_halfplane(in, d, 0.5 * d.squaredNorm(), out);
@@ -137,7 +124,7 @@ struct ClosingPolygon {
     static const ClosingPolygon table = [] {
       ClosingPolygon t{};
       for (int k = 0; k < sides; ++k) {
-        const double phi = 2.0 * 3.14159265358979323846 * (k + 0.5) / sides;
+        const double phi = 2.0 * std::numbers::pi * (k + 0.5) / sides;
         t.nx[static_cast<std::size_t>(k)] = std::cos(phi);
         t.ny[static_cast<std::size_t>(k)] = std::sin(phi);
       }
