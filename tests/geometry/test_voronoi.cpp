@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <numbers>
 #include <numeric>
 #include <random>
 
@@ -170,9 +171,12 @@ TEST_CASE("cells reaching past the closing radius are cut by exactly the closing
   SECTION("an isolated particle") {
     const double R = 0.3;
     const auto a = areas_of<LocalVoronoi>({Point(0.2, -0.1)}, box, {R});
-    const double expected = area(closed(ConvexPolygon::rectangle(-1, -1, 1, 1), R));
-    CHECK(a[0] == Approx(expected).epsilon(1e-13));
-    CHECK(expected == Approx(0.283570).epsilon(1e-5));  // 32 R^2 tan(pi/32) = 0.283655 less the 8 corners
+    // The 32-gon of inradius R (area 32 R^2 tan t, t = pi/32) has vertices on the axes at R / cos t; the
+    // square cuts off four tips, each a triangle of height R (1 / cos t - 1) on a base 2 R tan(t / 2).
+    const double t = std::numbers::pi / 32.0;
+    const double exact = 32.0 * R * R * std::tan(t) - 4.0 * R * R * std::tan(0.5 * t) * (1.0 / std::cos(t) - 1.0);
+    CHECK(a[0] == Approx(exact).epsilon(1e-13));
+    CHECK(area(closed(ConvexPolygon::rectangle(-1, -1, 1, 1), R)) == Approx(exact).epsilon(1e-13));
   }
   SECTION("a jittered patch closed at 0.75 spacings, against cutting every cell by all sides") {
     auto x = jittered(12, 0.3, 9);
