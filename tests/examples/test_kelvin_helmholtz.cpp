@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <array>
+
 using namespace rsph;
 
 TEST_CASE("Kelvin-Helmholtz setup: tau_KH = 0.58 and the seeded mode's amplitude", "[kelvin_helmholtz]") {
@@ -61,4 +63,25 @@ TEST_CASE("Kelvin-Helmholtz: RSPH's growth converges towards linear theory, 5x t
   CHECK(fine.growth_rate > 0.75 * linear);
   CHECK(fine.growth_rate > coarse.growth_rate);
   CHECK(std::abs(fine.energy_error) < 2e-3);
+}
+
+TEST_CASE("Kelvin-Helmholtz: the mode grows more at smaller h/Delta, as the paper says of the interface smoothing",
+          "[kelvin_helmholtz]") {
+  // §3.3: "As h/Delta is increased, the ability to smooth the interface is gradually lost". At 1/Delta = 128,
+  // M(tau_KH)/M(0) is 4.7, 3.5 and 2.0 at h/Delta = 1.0, 1.1 and 1.2 (the same to 1e-9 on one and two threads).
+  scenes::KelvinHelmholtzParams s;
+  s.cells = 128;
+  const auto none = [](const auto&) {};
+  std::array<double, 3> amplification{};
+  const std::array<double, 3> h_over_dx{1.0, 1.1, 1.2};
+  for (std::size_t i = 0; i < h_over_dx.size(); ++i) {
+    s.h_over_dx = h_over_dx[i];
+    const auto run = scenes::run_kelvin_helmholtz(true, s, none, none);
+    amplification[i] = run.amplitude_final / run.seed;
+  }
+  INFO("M(tau_KH)/M(0) at h/Delta = 1.0, 1.1, 1.2: " << amplification[0] << ", " << amplification[1] << ", "
+                                                     << amplification[2]);
+  CHECK(amplification[0] > amplification[1]);
+  CHECK(amplification[1] > amplification[2]);
+  CHECK(amplification[0] > 1.8 * amplification[2]);
 }
