@@ -172,22 +172,21 @@ inline double mean_spacing(const std::vector<Point>& x, const Box<2>& box) {
   return std::sqrt(extent / static_cast<double>(std::max<std::size_t>(x.size(), 1)));
 }
 
-/// Whether a cell may be missing a periodic image: its security disc (twice its farthest vertex
-/// distance) reaches beyond the band the images cover. Then the margin is widened and cells rebuilt.
-inline bool needs_more_images(const ConvexPolygon& cell, const Point& xa, const Box<2>& box, double margin) {
-  double r2 = 0.0;
-  for (int i = 0; i < cell.n; ++i) r2 = std::max(r2, cell[i].squaredNorm());
-  const double security = 2.0 * std::sqrt(r2);
-  for (int k = 0; k < 2; ++k)
-    if (box.periodic(k) && (xa[k] - security < box.lo[k] - margin || xa[k] + security > box.hi[k] + margin))
-      return true;
-  return false;
-}
-
+/// Squared distance of the farthest vertex from the particle (cells are given relative to it).
 inline double max_radius2_origin(const ConvexPolygon& p) {
   double r2 = 0.0;
   for (int i = 0; i < p.n; ++i) r2 = std::max(r2, p[i].squaredNorm());
   return r2;
+}
+
+/// Whether a cell may be missing a periodic image: its security disc (twice its farthest vertex
+/// distance) reaches beyond the band the images cover. Then the margin is widened and cells rebuilt.
+inline bool needs_more_images(const ConvexPolygon& cell, const Point& xa, const Box<2>& box, double margin) {
+  const double security = 2.0 * std::sqrt(max_radius2_origin(cell));
+  for (int k = 0; k < 2; ++k)
+    if (box.periodic(k) && (xa[k] - security < box.lo[k] - margin || xa[k] + security > box.hi[k] + margin))
+      return true;
+  return false;
 }
 
 inline void check_coincident(const ConvexPolygon& cell, std::size_t a) {
