@@ -1,7 +1,8 @@
 // The regularization microbenchmarks: building all Voronoi cells (local half-plane builder vs
 // Boost.Polygon) and the full remap (cells, overlaps, new particles), on a jittered lattice and on a
 // lattice sheared as by Keplerian rotation, and the full remap against the jitter's amplitude (the cost of
-// disorder), and a Keplerian disk with open edges as the planet-disk test remaps it. items_per_second = old
+// disorder), a Keplerian disk with open edges as the planet-disk test remaps it, and the remap onto a hexagonal
+// lattice. items_per_second = old
 // particles per second.
 #include "rsph/rsph.hpp"
 
@@ -143,6 +144,45 @@ void BM_remap_two_levels(benchmark::State& state) {
   state.counters["new_particles"] = static_cast<double>(time_remaps(state, p0, ml));
 }
 
+/// A hexagonal lattice of about n_particles (nearest-neighbour distance Delta = 1 / columns, an even number of
+/// rows so that y could be periodic), jittered by up to +-0.3 Delta per axis or sheared as make_set does.
+struct HexagonalSet {
+  ParticleSet<2, true> p;
+  Box<2> box;
+  double spacing;
+};
+HexagonalSet make_hexagonal_set(std::int64_t n_particles, int layout) {
+  const double pitch = std::sqrt(3.0) / 2.0;
+  const int columns = static_cast<int>(std::lround(std::sqrt(static_cast<double>(n_particles) * pitch)));
+  const int rows = 2 * static_cast<int>(std::lround(0.5 * static_cast<double>(n_particles) / columns));
+  HexagonalSet s;
+  s.spacing = 1.0 / columns;
+  s.box = domain();
+  s.box.hi[1] = rows * pitch * s.spacing;
+  const lattice::Hexagonal hexagonal{s.spacing};
+  std::mt19937 rng(1);
+  std::uniform_real_distribution<double> u(-0.3, 0.3), unit(-1.0, 1.0);
+  s.p.reserve(static_cast<std::size_t>(columns) * static_cast<std::size_t>(rows));
+  for (int j = 0; j < rows; ++j)
+    for (int i = 0; i < columns; ++i) {
+      Vec<2> x = hexagonal.site(s.box, {i, j});
+      x[0] += layout == sheared ? 7.3 * x[1] * x[1] : 0.3 * unit(rng) * s.spacing;
+      if (layout == jittered) x[1] = std::clamp(x[1] + 0.3 * unit(rng) * s.spacing, 0.0, s.box.hi[1]);
+      x[0] -= std::floor(x[0]);
+      s.p.add(hexagonal.cell_volume(), x, Vec<2>(u(rng), u(rng)), 1.2 * s.spacing, 1.0);
+    }
+  return s;
+}
+
+// The remap of a hexagonal lattice onto a hexagonal lattice: cells that are not rectangles take the general
+// overlap path (each old cell clipped by the hexagons its bounds meet).
+void BM_remap_hexagonal(benchmark::State& state) {
+  bench::use_threads(state);
+  const auto s = make_hexagonal_set(state.range(0), static_cast<int>(state.range(1)));
+  lattice::Hexagonal hexagonal{s.spacing};
+  time_remaps(state, s.p, hexagonal, s.box);
+}
+
 // One family per (layout, threads), so each complexity fit sees one scaling curve in N.
 // Arguments: {particles, layout (0 jittered, 1 sheared), threads (0: all)}.
 template <class Fn>
@@ -164,6 +204,7 @@ int main(int argc, char** argv) {
   register_family("cells_boost_polygon", BM_cells<geometry::BoostVoronoi>);
   register_family("remap", BM_remap);
   register_family("remap_two_levels", BM_remap_two_levels);
+  register_family("remap_hexagonal", BM_remap_hexagonal);
   for (int t : {1, 0}) {
     auto* b = benchmark::RegisterBenchmark(t == 1 ? "remap_disorder/1thread" : "remap_disorder/allthreads",
                                            BM_remap_disorder);
