@@ -1,35 +1,15 @@
 #include "rsph/geometry/polygon.hpp"
 
-// Boost.Geometry as the oracle, in plain double precision (its default rescaling to integers moves
-// results by ~1e-10).
-#define BOOST_GEOMETRY_NO_ROBUSTNESS
-// Debian 12's Boost.Geometry still includes a header Boost itself has deprecated; without this the build
-// prints its pragma message.
-#define BOOST_ALLOW_DEPRECATED_HEADERS
-#include <boost/geometry.hpp>
 #include <catch2/catch.hpp>
 
 #include <random>
 
+#include "boost_oracle.hpp"
+
 using namespace rsph::geometry;
-namespace bg = boost::geometry;
-using BgPoint = bg::model::d2::point_xy<double>;
-using BgPolygon = bg::model::polygon<BgPoint, false>;  // counter-clockwise
+using rsph::test::oracle_intersection_area;
 
 namespace {
-BgPolygon to_bg(const ConvexPolygon& p) {
-  BgPolygon out;
-  for (int i = 0; i < p.n; ++i) bg::append(out.outer(), BgPoint(p[i].x(), p[i].y()));
-  bg::append(out.outer(), BgPoint(p[0].x(), p[0].y()));
-  return out;
-}
-double oracle_intersection_area(const ConvexPolygon& a, const ConvexPolygon& b) {
-  std::vector<BgPolygon> result;
-  bg::intersection(to_bg(a), to_bg(b), result);
-  double s = 0.0;
-  for (const auto& r : result) s += bg::area(r);
-  return s;
-}
 // A random convex polygon: the hull of points on a jittered circle, as a regular polygon cut by half-planes.
 ConvexPolygon random_convex(std::mt19937& rng, const Point& c, double R) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -63,6 +43,15 @@ TEST_CASE("clipping agrees with Boost.Geometry's intersection", "[geometry]") {
     const ConvexPolygon a = random_convex(rng, Point(u(rng), u(rng)), 0.5 + 0.5 * std::abs(u(rng)));
     const ConvexPolygon b = random_convex(rng, Point(u(rng), u(rng)), 0.5 + 0.5 * std::abs(u(rng)));
     CHECK(area(clip_convex(a, b)) == Approx(oracle_intersection_area(a, b)).margin(1e-13));
+    // the copy-free area takes the same cuts: equal to the bit
+    CHECK(intersection_area(a, b) == area(clip_convex(a, b)));
+    // the sides of b moved by a shift cut as b moved does
+    const Point shift(0.3 * u(rng), 0.3 * u(rng));
+    ConvexPolygon moved = b;
+    moved.translate(shift);
+    const Sides sides = sides_of(b);
+    CHECK(area_within_sides(a, sides, shift, (1u << sides.n) - 1) ==
+          Approx(oracle_intersection_area(a, moved)).margin(1e-13));
     const double x0 = u(rng), y0 = u(rng);
     const auto rect = ConvexPolygon::rectangle(x0, y0, x0 + 0.4, y0 + 0.3);
     CHECK(clipped_area_rect(a, x0, y0, x0 + 0.4, y0 + 0.3) == Approx(oracle_intersection_area(a, rect)).margin(1e-13));

@@ -4,6 +4,7 @@
 
 #include <random>
 
+#include "../geometry/boost_oracle.hpp"
 #include "particle_sets.hpp"
 
 using namespace rsph;
@@ -64,6 +65,55 @@ TEST_CASE("remap onto a hexagonal lattice conserves exactly", "[regularize]") {
   for (auto& x : p.x) x[1] *= box.hi[1];
   const auto stats = check_conserving_remap(p, box, lattice::Hexagonal{dx});
   CHECK(stats.n_after == 40 * 46);
+}
+
+TEST_CASE("hexagonal lattice: each overlap equals Boost.Geometry's intersection of the cell and the hexagon",
+          "[regularize]") {
+  // The hexagonal path decides from the old cell's extent along the hexagon's side normals which sides cut and
+  // which hexagons lie apart; every overlap it reports must be the oracle's, and none may be missed.
+  const double dx = 1.0 / 20;
+  Box<2> box = box_with(Edge::periodic, Edge::periodic);
+  box.hi[1] = 24 * dx * std::sqrt(3.0) / 2.0;
+  const Vec<2> L = box.hi - box.lo;
+  for (const double shear : {0.0, 4.0}) {
+    auto p = jittered_gas(20, 0.45, 6, shear);
+    for (auto& x : p.x) x[1] *= box.hi[1];
+    const lattice::Hexagonal hexagonal{dx};
+    const auto grid = regularize::detail::candidate_grid(p, box, hexagonal, RemapParams{});
+    geometry::LocalVoronoi builder;
+    regularize::RemapWorkspace<2> workspace;
+    struct Record {
+      const ParticleSet<2, true>* p;
+      const lattice::Hexagonal* hexagonal;
+      const Box<2>* box;
+      const regularize::detail::CellGrid<2>* grid;
+      Vec<2> L;
+      std::size_t cells = 0, overlaps = 0;
+      double worst = 0.0, worst_sum = 0.0;
+      void restart() {}
+      void operator()(int, std::size_t a, const geometry::ConvexPolygon& cell,
+                      const std::vector<std::pair<std::size_t, double>>& ov, double cell_area) {
+        double sum = 0.0;
+        for (const auto& [flat, omega] : ov) {
+          geometry::ConvexPolygon hexagon = hexagonal->cell(*box, grid->unflat(flat), p->x[a]);
+          Vec<2> d = hexagonal->site(*box, grid->unflat(flat)) - p->x[a];  // the image nearest the particle
+          const Vec<2> image = (d.array() / L.array()).round().matrix().cwiseProduct(L);
+          hexagon.translate(-image);
+          worst = std::max(worst, std::abs(omega - test::oracle_intersection_area(cell, hexagon)) / cell_area);
+          sum += omega;
+        }
+        worst_sum = std::max(worst_sum, std::abs(sum - geometry::area(cell)) / cell_area);
+        ++cells;
+        overlaps += ov.size();
+      }
+    } record{&p, &hexagonal, &box, &grid, L};
+    regularize::detail::for_each_old_cell(p, box, hexagonal, builder, grid, region::Unbounded{}, workspace, record);
+    INFO("shear " << shear << ": " << record.overlaps << " overlaps of " << record.cells << " cells");
+    CHECK(record.cells == p.n_real);
+    CHECK(record.overlaps > 3 * record.cells);  // a jittered cell spans several hexagons
+    CHECK(record.worst < 1e-13);
+    CHECK(record.worst_sum < 1e-13);
+  }
 }
 
 TEST_CASE("isothermal gas: the kinetic energy lost is reported, not stored", "[regularize]") {

@@ -6,7 +6,9 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 namespace rsph::geometry {
@@ -238,6 +240,51 @@ inline ConvexPolygon clip_convex(const ConvexPolygon& p, const ConvexPolygon& wi
     cur = next;
   }
   return cur;
+}
+
+/// The sides of a convex polygon (counter-clockwise) as outward normals and offsets: x is inside when
+/// normal[k] . x <= offset[k] for every k. A lattice whose cells are all translates of one shape clips by
+/// these, each offset moved to the cell's site.
+struct Sides {
+  std::array<Point, ConvexPolygon::capacity> normal;
+  std::array<double, ConvexPolygon::capacity> offset;
+  int n = 0;
+};
+inline Sides sides_of(const ConvexPolygon& shape) {
+  Sides s;
+  s.n = shape.n;
+  for (int i = 0, j = shape.n - 1; i < shape.n; j = i++) {
+    const Point e = shape[i] - shape[j];
+    const auto k = static_cast<std::size_t>(i);
+    s.normal[k] = Point(e.y(), -e.x());
+    s.offset[k] = s.normal[k].dot(shape[j]);
+  }
+  return s;
+}
+
+/// Area of p inside the sides k of `sides` whose bit is set in `cutting` (sides.n <= 32), moved by
+/// `shift` (offset[k] + normal[k] . shift); the other sides must not cut p. A side that no vertex of the
+/// part left so far lies beyond is passed over without a copy.
+inline double area_within_sides(const ConvexPolygon& p, const Sides& sides, const Point& shift, std::uint32_t cutting) {
+  ConvexPolygon buffers[2];
+  const ConvexPolygon* cut = &p;
+  int next = 0;
+  for (; cutting != 0 && cut->n >= 3; cutting &= cutting - 1) {
+    const auto k = static_cast<std::size_t>(std::countr_zero(cutting));
+    if (detail::cut_halfplane(*cut, sides.normal[k], sides.offset[k] + sides.normal[k].dot(shift), buffers[next])) {
+      cut = &buffers[next];
+      next ^= 1;
+    }
+  }
+  return area(*cut);
+}
+
+/// Area of p inside the convex polygon `window` (counter-clockwise): area(clip_convex(p, window)) to the bit,
+/// without a copy for the sides no vertex of p lies beyond.
+inline double intersection_area(const ConvexPolygon& p, const ConvexPolygon& window) {
+  if (window.n > 32) return area(clip_convex(p, window));
+  const std::uint32_t all = window.n == 32 ? ~std::uint32_t{0} : (std::uint32_t{1} << window.n) - 1;
+  return area_within_sides(p, sides_of(window), Point::Zero(), all);
 }
 
 }  // namespace rsph::geometry

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <concepts>
 #include <cstdint>
+#include <numbers>
 #include <string>
 
 namespace rsph {
@@ -119,11 +120,13 @@ struct Hexagonal {
   double cell_volume() const { return spacing * row_pitch(); }
   IndexRange<2> cells_touching(const Box<2>& box, const Vec<2>& lo, const Vec<2>& hi) const {
     IndexRange<2> r;
-    // a hexagon reaches 2/3 of a row pitch beyond its row band and Delta/2 beyond its site in x
-    r.lo[1] = static_cast<std::int64_t>(std::floor((lo[1] - box.lo[1]) / row_pitch())) - 1;
-    r.hi[1] = static_cast<std::int64_t>(std::floor((hi[1] - box.lo[1]) / row_pitch())) + 1;
-    r.lo[0] = static_cast<std::int64_t>(std::floor((lo[0] - box.lo[0]) / spacing)) - 1;
-    r.hi[0] = static_cast<std::int64_t>(std::floor((hi[0] - box.lo[0]) / spacing)) + 1;
+    // Row j's hexagons span (j + 1/2 -+ 2/3) row pitches in y; in x, hexagon i spans (i - 1/4, i + 3/4)
+    // spacings on even rows and half a spacing more on odd ones. A cell that only touches [lo, hi] along a
+    // line may be left out (it overlaps nothing).
+    r.lo[1] = static_cast<std::int64_t>(std::floor((lo[1] - box.lo[1]) / row_pitch() - 7.0 / 6.0)) + 1;
+    r.hi[1] = static_cast<std::int64_t>(std::ceil((hi[1] - box.lo[1]) / row_pitch() + 1.0 / 6.0)) - 1;
+    r.lo[0] = static_cast<std::int64_t>(std::floor((lo[0] - box.lo[0]) / spacing - 1.25)) + 1;
+    r.hi[0] = static_cast<std::int64_t>(std::ceil((hi[0] - box.lo[0]) / spacing + 0.25)) - 1;
     return r;
   }
   Vec<2> site(const Box<2>& box, std::array<std::int64_t, 2> idx) const {
@@ -143,14 +146,23 @@ struct Hexagonal {
     }
     return p;
   }
-  geometry::ConvexPolygon cell(const Box<2>& box, std::array<std::int64_t, 2> idx, const Vec<2>& origin) const {
-    const Vec<2> c = site(box, idx) - origin;
-    const double R = spacing / 1.7320508075688772935;  // circumradius of a hexagon of inradius Delta/2
+  /// Every cell is this hexagon moved to its site: pointed along y, vertices at R (cos, sin)(30 + 60 k
+  /// degrees) with the circumradius R = Delta / sqrt(3) (inradius Delta / 2).
+  geometry::ConvexPolygon cell_shape() const {
+    const double half = 0.5 * spacing, R = spacing / std::numbers::sqrt3;
     geometry::ConvexPolygon h;
-    for (int k = 0; k < 6; ++k) {
-      const double phi = 3.14159265358979323846 / 6.0 + k * 3.14159265358979323846 / 3.0;
-      h.push(c + R * Vec<2>(std::cos(phi), std::sin(phi)));
-    }
+    h.push(Vec<2>(half, 0.5 * R));
+    h.push(Vec<2>(0.0, R));
+    h.push(Vec<2>(-half, 0.5 * R));
+    h.push(Vec<2>(-half, -0.5 * R));
+    h.push(Vec<2>(0.0, -R));
+    h.push(Vec<2>(half, -0.5 * R));
+    return h;
+  }
+  /// The cell of idx relative to `origin`.
+  geometry::ConvexPolygon cell(const Box<2>& box, std::array<std::int64_t, 2> idx, const Vec<2>& origin) const {
+    geometry::ConvexPolygon h = cell_shape();
+    h.translate(site(box, idx) - origin);
     return h;
   }
   static constexpr bool rectangular_cells = false;

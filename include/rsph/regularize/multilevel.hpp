@@ -302,7 +302,7 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
           continue;  // apart: no overlap, and no clip needed to say so
         ConvexPolygon window = (*polygon)[k];
         for (int v = 0; v < window.n; ++v) window.v[static_cast<std::size_t>(v)] += d;
-        om[i] = geometry::area(geometry::clip_convex(cell, window));
+        om[i] = geometry::intersection_area(cell, window);
         A_poly += om[i];
       }
       auto& S = sums[static_cast<std::size_t>(thread)];

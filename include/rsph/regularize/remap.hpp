@@ -10,11 +10,14 @@
 #include "rsph/regularize/region.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <numeric>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace rsph::regularize {
@@ -259,6 +262,27 @@ void for_each_old_interval(const ParticleSet<1, E>& p, const Box<1>& box, const 
   }
 }
 
+/// What the overlaps need of a lattice's cells beyond their sites: nothing for rectangles (the grid lines),
+/// the sides of the cell shape for the others.
+struct NoSides {};
+template <class Lattice>
+using CellSides = std::conditional_t<Lattice::rectangular_cells, NoSides, geometry::Sides>;
+
+template <class Lattice>
+CellSides<Lattice> cell_sides(const Lattice& lattice) {
+  if constexpr (Lattice::rectangular_cells) {
+    return {};
+  } else {
+    static_assert(
+        requires { lattice.cell_shape(); },
+        "a lattice whose cells are not rectangles needs `geometry::ConvexPolygon cell_shape() const`: the "
+        "cell around its site, every cell being that shape moved to its site");
+    const geometry::ConvexPolygon shape = lattice.cell_shape();
+    require(shape.n >= 3 && shape.n <= 32, "regularization: a lattice's cell shape needs 3 to 32 sides");
+    return geometry::sides_of(shape);
+  }
+}
+
 /// Visits every old particle's closed Voronoi cell (2D) with its overlaps on the cells of `grid`:
 /// action(thread, a, cell, overlaps, cell_area), the cell relative to x_a and overlaps as (flat index,
 /// Omega). The builder may restart (wider periodic images): action.restart() then forgets what it saw.
@@ -279,6 +303,7 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
       std::vector<std::int64_t> parts;
     };
     std::vector<Scratch> scratch;
+    [[no_unique_address]] CellSides<Lattice> sides;
 
     /// Axis k's part of the flat index of lattice index i: wrapped on periodic axes, clamped at walls
     /// (a round-off sliver beyond a wall); -1 outside the grid.
@@ -340,9 +365,33 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
             if (omega > crumb) add_overlap(cols[i], rows[j], omega);
           }
       } else {
+        // Every lattice cell is the lattice's shape moved to its site, so all have the same side normals: the
+        // old cell's extent along each, taken once, tells for each candidate which sides cut the old cell
+        // and whether one keeps them apart, before any clipping (most candidates of the padded range are apart).
+        std::array<double, 32> reach_lo, reach_hi;
+        for (int k = 0; k < sides.n; ++k) {
+          const auto kk = static_cast<std::size_t>(k);
+          reach_lo[kk] = std::numeric_limits<double>::max();
+          reach_hi[kk] = std::numeric_limits<double>::lowest();
+          for (int v = 0; v < cell.n; ++v) {
+            const double d = sides.normal[kk].dot(cell[v]);
+            reach_lo[kk] = std::min(reach_lo[kk], d);
+            reach_hi[kk] = std::max(reach_hi[kk], d);
+          }
+        }
         for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
           for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
-            const double omega = geometry::area(geometry::clip_convex(cell, lattice->cell(*box, {i, j}, xo)));
+            const Vec<2> site = lattice->site(*box, {i, j}) - xo;
+            std::uint32_t cutting = 0;
+            bool apart = false;
+            for (int k = 0; k < sides.n; ++k) {
+              const auto kk = static_cast<std::size_t>(k);
+              const double offset = sides.offset[kk] + sides.normal[kk].dot(site);
+              apart |= reach_lo[kk] >= offset;
+              cutting |= static_cast<std::uint32_t>(reach_hi[kk] > offset) << k;
+            }
+            if (apart) continue;
+            const double omega = cutting == 0 ? cell_area : geometry::area_within_sides(cell, sides, site, cutting);
             if (omega > 0.0) add_overlap(axis_part(0, i), axis_part(1, j), omega);
           }
       }
@@ -355,7 +404,8 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
                   &grid,
                   &region,
                   &action,
-                  std::vector<typename Visitor::Scratch>(static_cast<std::size_t>(geometry::builder_threads()))};
+                  std::vector<typename Visitor::Scratch>(static_cast<std::size_t>(geometry::builder_threads())),
+                  cell_sides(lattice)};
   builder.build(p.x, box, workspace.closing, visitor, only);
 }
 
