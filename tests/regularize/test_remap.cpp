@@ -206,8 +206,13 @@ TEST_CASE("open edges: cells closed by discs; nearly empty cells hand their shar
   }
   RemapParams params;
   params.min_fill = 0.2;  // large, so that edge cells are dropped
+  auto q = p;
   const auto stats = check_conserving_remap(p, box_with(Edge::open, Edge::open), lattice::Square{0.02}, params);
   CHECK(stats.dropped_cells > 0);
+  // the same ring onto hexagons: the candidate range and the side tests hold at open edges too
+  const auto hexagonal = check_conserving_remap(q, box_with(Edge::open, Edge::open), lattice::Hexagonal{0.02}, params);
+  CHECK(hexagonal.dropped_cells > 0);
+  CHECK(hexagonal.n_after > 100);
 }
 
 TEST_CASE("1D remap: a shift by one spacing keeps a profile, half a spacing diffuses most", "[regularize]") {
