@@ -305,8 +305,9 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
     std::vector<Scratch> scratch;
     [[no_unique_address]] CellSides<Lattice> sides;
 
-    /// Axis k's part of the flat index of lattice index i: wrapped on periodic axes, clamped at walls
-    /// (a round-off sliver beyond a wall); -1 outside the grid.
+    /// Axis k's part of the flat index of lattice index i: wrapped on periodic axes, clamped at walls (a
+    /// round-off sliver beyond a wall; on a hexagonal lattice also the tips of the row of hexagons beyond a
+    /// wall along y, which go to the cell of the same column in the row inside); -1 outside the grid.
     std::int64_t axis_part(int k, std::int64_t i) const {
       const auto kk = static_cast<std::size_t>(k);
       if (grid->periods[kk] > 0) i = wrap_index(i, grid->periods[kk]);
@@ -367,7 +368,7 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
       } else {
         // Every lattice cell is the lattice's shape moved to its site, so all have the same side normals: the
         // old cell's extent along each, taken once, tells for each candidate which sides cut the old cell
-        // and whether one keeps them apart, before any clipping (most candidates of the padded range are apart).
+        // and whether one keeps them apart, before any clipping (many in the rectangular index range are).
         std::array<double, 32> reach_lo, reach_hi;
         for (int k = 0; k < sides.n; ++k) {
           const auto kk = static_cast<std::size_t>(k);
