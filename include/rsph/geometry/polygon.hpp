@@ -262,10 +262,12 @@ inline Sides sides_of(const ConvexPolygon& shape) {
   return s;
 }
 
-/// Area of p inside the sides k of `sides` whose bit is set in `cutting` (sides.n <= 32), moved by
-/// `shift` (offset[k] + normal[k] . shift); the other sides must not cut p. A side that no vertex of the
-/// part left so far lies beyond is passed over without a copy.
-inline double area_within_sides(const ConvexPolygon& p, const Sides& sides, const Point& shift, std::uint32_t cutting) {
+/// f(the part of p inside the sides k of `sides` whose bit is set in `cutting`, moved by `shift`: offset[k] +
+/// normal[k] . shift), for sides.n <= 32; the other sides must not cut p. A side that no vertex of the part
+/// left so far lies beyond is passed over without a copy.
+template <class F>
+auto with_part_within_sides(const ConvexPolygon& p, const Sides& sides, const Point& shift, std::uint32_t cutting,
+                            F&& f) {
   ConvexPolygon buffers[2];
   const ConvexPolygon* cut = &p;
   int next = 0;
@@ -276,7 +278,12 @@ inline double area_within_sides(const ConvexPolygon& p, const Sides& sides, cons
       next ^= 1;
     }
   }
-  return area(*cut);
+  return f(*cut);
+}
+
+/// Area of the part of p that with_part_within_sides gives.
+inline double area_within_sides(const ConvexPolygon& p, const Sides& sides, const Point& shift, std::uint32_t cutting) {
+  return with_part_within_sides(p, sides, shift, cutting, [](const ConvexPolygon& part) { return area(part); });
 }
 
 /// Area of p inside the convex polygon `window` (counter-clockwise): area(clip_convex(p, window)) to the bit,

@@ -18,6 +18,7 @@
 #include <span>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace rsph::regularize {
@@ -306,8 +307,7 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
     [[no_unique_address]] CellSides<Lattice> sides;
 
     /// Axis k's part of the flat index of lattice index i: wrapped on periodic axes, clamped at walls (a
-    /// round-off sliver beyond a wall; on a hexagonal lattice also the tips of the row of hexagons beyond a
-    /// wall along y, which go to the cell of the same column in the row inside); -1 outside the grid.
+    /// round-off sliver beyond a wall); -1 outside the grid.
     std::int64_t axis_part(int k, std::int64_t i) const {
       const auto kk = static_cast<std::size_t>(k);
       if (grid->periods[kk] > 0) i = wrap_index(i, grid->periods[kk]);
@@ -315,6 +315,46 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
       if (box->edge[k] == Edge::reflecting) i = std::clamp<std::int64_t>(i, 0, grid->count[kk] - 1);
       if (i < 0 || i >= grid->count[kk]) return -1;
       return k == 0 ? i : i * grid->count[0];
+    }
+    /// Whether lattice index idx lies beyond a wall (outside the grid along a reflecting axis).
+    bool beyond_wall(std::array<std::int64_t, 2> idx) const {
+      for (int k = 0; k < 2; ++k) {
+        const auto kk = static_cast<std::size_t>(k);
+        if (box->edge[k] == Edge::reflecting &&
+            (idx[kk] < grid->range.lo[kk] || idx[kk] >= grid->range.lo[kk] + grid->count[kk]))
+          return true;
+      }
+      return false;
+    }
+    /// Cells that are not rectangles do not tile a box with walls: `part`, an old cell's overlap with the
+    /// lattice cell idx beyond a wall (relative to xo), goes to the nearest sites inside among idx's
+    /// neighbours, each taking the piece nearer to it than to the others, just as the old cells, clipped to
+    /// the box, are the Voronoi cells of the sites inside. A lattice set then maps onto itself at walls too.
+    /// Fills `shares` with (index inside, area); returns how many.
+    using Share = std::pair<std::array<std::int64_t, 2>, double>;
+    std::size_t share_beyond_wall(std::array<std::int64_t, 2> idx, const geometry::ConvexPolygon& part,
+                                  const Vec<2>& xo, std::array<Share, 8>& shares) const {
+      std::array<Vec<2>, 8> at;
+      std::size_t n = 0;
+      for (std::int64_t dj = -1; dj <= 1; ++dj)
+        for (std::int64_t di = -1; di <= 1; ++di) {
+          const std::array<std::int64_t, 2> nb{idx[0] + di, idx[1] + dj};
+          if ((di == 0 && dj == 0) || beyond_wall(nb)) continue;
+          shares[n].first = nb;
+          at[n++] = lattice->site(*box, nb) - xo;
+        }
+      if (n == 0) {  // no site inside next to it (a box one row wide): the clamped cell takes it all
+        shares[0] = {idx, geometry::area(part)};
+        return 1;
+      }
+      for (std::size_t k = 0; k < n; ++k) {
+        geometry::ConvexPolygon piece = part;
+        for (std::size_t m = 0; m < n && piece.n >= 3; ++m)
+          if (m != k)  // nearer to at[k] than to at[m]
+            geometry::clip_halfplane(piece, at[m] - at[k], 0.5 * (at[m].squaredNorm() - at[k].squaredNorm()));
+        shares[k].second = geometry::area(piece);
+      }
+      return n;
     }
     void restart() { action->restart(); }
     void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
@@ -392,6 +432,18 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
               cutting |= static_cast<std::uint32_t>(reach_hi[kk] > offset) << k;
             }
             if (apart) continue;
+            if (beyond_wall({i, j})) {
+              std::array<Share, 8> shares;
+              const std::size_t n_shares = share_beyond_wall(
+                  {i, j},
+                  geometry::with_part_within_sides(cell, sides, site, cutting,
+                                                   [](const geometry::ConvexPolygon& part) { return part; }),
+                  xo, shares);
+              for (std::size_t k = 0; k < n_shares; ++k)
+                if (shares[k].second > 0.0)
+                  add_overlap(axis_part(0, shares[k].first[0]), axis_part(1, shares[k].first[1]), shares[k].second);
+              continue;
+            }
             const double omega = cutting == 0 ? cell_area : geometry::area_within_sides(cell, sides, site, cutting);
             if (omega > 0.0) add_overlap(axis_part(0, i), axis_part(1, j), omega);
           }
