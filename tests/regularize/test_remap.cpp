@@ -95,10 +95,10 @@ TEST_CASE("hexagonal lattice: each overlap equals Boost.Geometry's intersection 
                       const std::vector<std::pair<std::size_t, double>>& ov, double cell_area) {
         double sum = 0.0;
         for (const auto& [flat, omega] : ov) {
-          geometry::ConvexPolygon hexagon = hexagonal->cell(*box, grid->unflat(flat), p->x[a]);
-          Vec<2> d = hexagonal->site(*box, grid->unflat(flat)) - p->x[a];  // the image nearest the particle
-          const Vec<2> image = (d.array() / L.array()).round().matrix().cwiseProduct(L);
-          hexagon.translate(-image);
+          const auto idx = grid->unflat(flat);
+          geometry::ConvexPolygon hexagon = hexagonal->cell(*box, idx, p->x[a]);
+          const Vec<2> d = hexagonal->site(*box, idx) - p->x[a];
+          hexagon.translate(-(d.array() / L.array()).round().matrix().cwiseProduct(L));  // the image nearest x_a
           worst = std::max(worst, std::abs(omega - test::oracle_intersection_area(cell, hexagon)) / cell_area);
           sum += omega;
         }
