@@ -23,7 +23,9 @@ def main():
     amp_ax = fig.add_subplot(grid[-1, :])
     for i, d in enumerate(args.dirs):
         s = read_summary(d)
-        label = f"{s['method'].upper()}, alpha_u = {s['alpha_u']:g}"
+        label = f"{s['method'].upper()}, alpha_u = {s['alpha_u']:g}, 1/dx = {s['cells']}"
+        if "h_over_dx" in s:  # older summaries lack it
+            label += f", {'h/dx' if s['method'] == 'rsph' else 'eta'} = {s['h_over_dx']:g}"
         ax = fig.add_subplot(grid[i // 2, i % 2])
         with h5py.File(os.path.join(d, "snap_00001.h5"), "r") as h:
             x = h["x"][:]

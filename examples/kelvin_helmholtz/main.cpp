@@ -57,6 +57,8 @@ int main(int argc, char** argv) {
     csv.close();
     io::Json summary;
     summary.set("test", "kelvin_helmholtz").set("method", method).set("alpha_u", s.alpha_u).set("cells", s.cells);
+    summary.set("h_over_dx", s.h_over_dx).set("courant", s.courant);
+    if (method == "rsph") summary.set("reg_steps", s.reg_steps);
     summary.set("particles", r.particles).set("tau_KH", s.tau_KH()).set("time", r.t.back());
     summary.set("amplitude_seed", r.seed).set("amplitude_final", r.amplitude_final);
     summary.set("amplification", r.amplitude_final / r.seed).set("growth_rate", r.growth_rate);
