@@ -30,6 +30,8 @@ int main(int argc, char** argv) {
         "cycle-unit", ex::po::value(&s.cycle_unit)->default_value(40), "steps per unit of c_r")(
         "viscosity", ex::po::value(&s.viscosity)->default_value("mg"),
         "mg: Monaghan-Gingold with alpha from nu_s (the paper); ns: Navier-Stokes stress tensor")(
+        "lattice", ex::po::value(&s.lattice)->default_value("square"),
+        "regularization lattice: square (the paper's) or hexagonal (Delta the nearest-neighbour distance)")(
         "taus", ex::po::value(&taus)->default_value(taus), "snapshot times tau* (comma separated)")(
         "sigma-floor", ex::po::value(&s.sigma_floor)->default_value(1e-4),
         "initial annulus: where Sigma exceeds this fraction of its peak")(
@@ -106,7 +108,7 @@ int main(int argc, char** argv) {
     io::Json summary;
     summary.set("test", "viscous_ring").set("viscosity", s.viscosity).set("nu_s", s.nu).set("h", s.h);
     summary.set("h_over_dx", s.h_over_dx).set("cycle", s.cycle).set("cycle_unit", s.cycle_unit);
-    summary.set("max_bin", s.max_bin);
+    summary.set("max_bin", s.max_bin).set("lattice", s.lattice);
     summary.set("nu_eff", r.nu_eff).set("nu_eff_over_nu_s", r.nu_eff / s.nu);
     summary.set("nu_eff_min", r.nu_eff_min).set("nu_eff_max", r.nu_eff_max).set("noise_error", r.noise_error);
     summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final);

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace rsph::scenes {
@@ -23,13 +24,14 @@ struct ViscousRingParams {
   int cycle_unit = 40;
   double tau0 = 0.018;  ///< tau* of the initial state
   std::vector<double> taus{0.054, 0.090, 0.126, 0.162, 0.198};
-  double sigma_floor = 1e-4;     ///< the initial annulus: Sigma(tau*_0) above this fraction of its peak
-  double inner_radius = 0.1;     ///< particles inside are accreted by the central mass (removed, counted)
-  std::string viscosity = "mg";  ///< mg: Monaghan-Gingold with Meglicki's alpha; ns: Navier-Stokes stress
-  double bin_width = 0.01;       ///< radial bins of the azimuthal average (R_0)
-  double force = 0.25;           ///< time-step force factor
-  int max_bin = 0;               ///< mg: individual time steps in 2^max_bin bins (0: one global step)
-  double M = 1.0;                ///< ring mass
+  double sigma_floor = 1e-4;       ///< the initial annulus: Sigma(tau*_0) above this fraction of its peak
+  double inner_radius = 0.1;       ///< particles inside are accreted by the central mass (removed, counted)
+  std::string viscosity = "mg";    ///< mg: Monaghan-Gingold with Meglicki's alpha; ns: Navier-Stokes stress
+  std::string lattice = "square";  ///< the regularization lattice: square (the paper's) or hexagonal
+  double bin_width = 0.01;         ///< radial bins of the azimuthal average (R_0)
+  double force = 0.25;             ///< time-step force factor
+  int max_bin = 0;                 ///< mg: individual time steps in 2^max_bin bins (0: one global step)
+  double M = 1.0;                  ///< ring mass
 
   void validate() const {
     require(nu > 0.0, "viscous ring: nu must be positive (got " + std::to_string(nu) + ")");
@@ -40,6 +42,8 @@ struct ViscousRingParams {
             "viscous ring: snapshot times tau* must increase and follow tau*_0 = " + std::to_string(tau0));
     require(sigma_floor > 0.0 && sigma_floor < 1.0, "viscous ring: the initial floor must lie in (0, 1)");
     require(viscosity == "mg" || viscosity == "ns", "viscous ring: unknown viscosity '" + viscosity + "' (mg, ns)");
+    require(lattice == "square" || lattice == "hexagonal",
+            "viscous ring: unknown lattice '" + lattice + "' (square, hexagonal)");
     require(bin_width > 0.0, "viscous ring: the radial bin width must be positive");
     require(inner_radius >= 0.0, "viscous ring: the accretion radius must be non-negative");
     require(max_bin >= 0 && max_bin <= 12, "viscous ring: max_bin must lie in [0, 12]");
@@ -68,15 +72,18 @@ struct ViscousRingParams {
   }
 };
 
-/// Lattice sites inside the annulus; masses from eq. (16) over the kernel's lattice sum, so rho = Sigma.
-inline ParticleSet<2, false> ring_particles(const ViscousRingParams& s) {
+/// Lattice sites inside the annulus; masses from eq. (16) times the cell area over the kernel's lattice sum,
+/// so rho = Sigma. A hexagonal lattice of the same Delta (nearest-neighbour distance) holds 2/sqrt(3) times
+/// the sites.
+template <class Lattice>
+ParticleSet<2, false> ring_particles_on(const ViscousRingParams& s, const Lattice& lat) {
   s.validate();
   const auto ring = s.ring();
   const auto [x_in, x_out] = s.annulus();
-  const double dx = s.spacing();
-  const double bias = kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
+  constexpr bool hexagonal = std::is_same_v<Lattice, lattice::Hexagonal>;
+  const double bias = hexagonal ? kernel::hexagonal_lattice_sum<kernel::CubicSpline>(s.h_over_dx)
+                                : kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
   const Box<2> box = s.box();
-  const lattice::Square lat{dx};
   const auto range = lat.cells_touching(box, Vec<2>(-x_out, -x_out), Vec<2>(x_out, x_out));
   ParticleSet<2, false> p;
   for (std::int64_t j = range.lo[1]; j <= range.hi[1]; ++j)
@@ -86,10 +93,14 @@ inline ParticleSet<2, false> ring_particles(const ViscousRingParams& s) {
       if (R < x_in || R > x_out) continue;
       const Vec<2> e_R = x / R, e_phi(-e_R[1], e_R[0]);
       const Vec<2> v = ring.v_phi(R) * e_phi + ring.v_R(s.tau0, R) * e_R;
-      p.add(ring.sigma(s.tau0, R) * dx * dx / bias, x, v, s.h);
+      p.add(ring.sigma(s.tau0, R) * lat.cell_volume() / bias, x, v, s.h);
     }
   require(p.n_real > 0, "viscous ring: the annulus holds no lattice site (h too large?)");
   return p;
+}
+inline ParticleSet<2, false> ring_particles(const ViscousRingParams& s) {
+  if (s.lattice == "hexagonal") return ring_particles_on(s, lattice::Hexagonal{s.spacing()});
+  return ring_particles_on(s, lattice::Square{s.spacing()});
 }
 
 /// Azimuthal statistics of Sigma (the particles' SPH density) in radial bins.
@@ -203,15 +214,14 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
 
 }  // namespace detail
 
-/// Runs the ring with the scene's regularization cycle and viscosity. on_step(sim) after each step;
-/// on_snapshot(sim, k) at the start (k = -1) and at each snapshot k.
-template <class OnStep, class OnSnapshot>
-RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
+namespace detail {
+template <class Lattice, class OnStep, class OnSnapshot>
+RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnStep&& on_step,
+                            OnSnapshot&& on_snapshot) {
   using K = kernel::CubicSpline;
   using MG = physics::ShearViscosityMG<K, 2>;
   using NS = physics::NavierStokesViscosity<2>;
-  using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps>;
-  s.validate();
+  using Reg = regularize::LatticeRegularizer<Lattice, schedule::EveryNSteps>;
   TimeStepParams ts;
   ts.force = s.force;
   const physics::PointMass<2> star{1.0, Vec<2>::Zero(), 0.0};
@@ -220,23 +230,35 @@ RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapsho
   // than creeping outwards by a closing radius at every regularization; cells with less than 1e-6 of
   // the largest mass join their neighbours, so the far tails (Sigma ~ 1e-6 of its peak) cost nothing.
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-  const auto reg =
-      Reg(lattice::Square{s.spacing()}, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit}, remap);
-  auto run = [&](auto&& sim) { return detail::run_ring(sim, s, on_step, on_snapshot); };
+  const auto reg = Reg(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit}, remap);
+  auto run = [&](auto&& sim) { return run_ring(sim, s, on_step, on_snapshot); };
   if (s.viscosity == "ns") {
     if (s.cycle > 0)
-      return run(Simulation<2, K, eos::Pressureless, Reg, NS, physics::PointMass<2>>(ring_particles(s), s.box(), {},
-                                                                                     reg, ts, NS{s.nu}, star));
+      return run(Simulation<2, K, eos::Pressureless, Reg, NS, physics::PointMass<2>>(ring_particles_on(s, lat), s.box(),
+                                                                                     {}, reg, ts, NS{s.nu}, star));
     return run(Simulation<2, K, eos::Pressureless, regularize::None, NS, physics::PointMass<2>>(
-        ring_particles(s), s.box(), {}, {}, ts, NS{s.nu}, star));
+        ring_particles_on(s, lat), s.box(), {}, {}, ts, NS{s.nu}, star));
   }
   ts.max_bin = s.max_bin;
-  const MG mg = MG::on_square_lattice(s.nu, s.h_over_dx);
+  // the MG operator's strength on the particles' lattice
+  const MG mg = std::is_same_v<Lattice, lattice::Hexagonal> ? MG::on_hexagonal_lattice(s.nu, s.h_over_dx)
+                                                            : MG::on_square_lattice(s.nu, s.h_over_dx);
   if (s.cycle > 0)
-    return run(Simulation<2, K, eos::Pressureless, Reg, MG, physics::PointMass<2>>(ring_particles(s), s.box(), {}, reg,
-                                                                                   ts, mg, star));
+    return run(Simulation<2, K, eos::Pressureless, Reg, MG, physics::PointMass<2>>(ring_particles_on(s, lat), s.box(),
+                                                                                   {}, reg, ts, mg, star));
   return run(Simulation<2, K, eos::Pressureless, regularize::None, MG, physics::PointMass<2>>(
-      ring_particles(s), s.box(), {}, {}, ts, mg, star));
+      ring_particles_on(s, lat), s.box(), {}, {}, ts, mg, star));
+}
+}  // namespace detail
+
+/// Runs the ring with the scene's regularization cycle, lattice and viscosity. on_step(sim) after each
+/// step; on_snapshot(sim, k) at the start (k = -1) and at each snapshot k.
+template <class OnStep, class OnSnapshot>
+RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
+  s.validate();
+  if (s.lattice == "hexagonal")
+    return detail::run_viscous_ring_on(s, lattice::Hexagonal{s.spacing()}, on_step, on_snapshot);
+  return detail::run_viscous_ring_on(s, lattice::Square{s.spacing()}, on_step, on_snapshot);
 }
 
 }  // namespace rsph::scenes

@@ -40,6 +40,13 @@ TEST_CASE("viscous ring: initial lattice state follows eqs. (16)-(18)", "[exampl
   }
   // masses carry eq. (16) over the kernel's lattice sum (1.003 at h/Delta = 1.6), so rho = Sigma
   CHECK(mass * kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx) == Approx(s.M).epsilon(2e-4));
+  // on hexagons: 2/sqrt(3) times the sites, the mass over the hexagonal lattice sum
+  s.lattice = "hexagonal";
+  const auto q = scenes::ring_particles(s);
+  double hex_mass = 0.0;
+  for (double m : q.m) hex_mass += m;
+  CHECK(static_cast<double>(q.n_real) / static_cast<double>(p.n_real) == Approx(2.0 / std::sqrt(3.0)).epsilon(0.02));
+  CHECK(hex_mass * kernel::hexagonal_lattice_sum<kernel::CubicSpline>(s.h_over_dx) == Approx(s.M).epsilon(2e-4));
 }
 
 TEST_CASE("viscous ring: regularization adds viscosity and removes noise, conserving mass", "[examples][ring]") {

@@ -91,6 +91,14 @@ TEST_CASE("lattice sum: the SPH density bias of a uniform lattice", "[kernel]") 
       (2.0 / 3.0) / 1.2 * (1.0 + 2.0 * kernel::CubicSpline::f(1.0 / 1.2) + 2.0 * kernel::CubicSpline::f(2.0 / 1.2));
   CHECK(kernel::lattice_sum<kernel::CubicSpline, 1>(1.2) == Approx(by_hand).epsilon(1e-14));
   CHECK(by_hand == Approx(1.0018004).margin(1e-7));
+  // hexagonal lattice: the same limit with cells of area sqrt(3)/2; by hand at h/dx = 1.2 (support 2.4): the
+  // site, 6 at distance 1, 6 at sqrt(3) (r/h = 1.443), 6 at 2 (r/h = 1.667)
+  CHECK(kernel::hexagonal_lattice_sum<kernel::QuinticSpline>(3.0) == Approx(1.0).margin(1e-6));
+  const double hexagonal_by_hand =
+      std::sqrt(3.0) / 2.0 * (10.0 / (7.0 * std::numbers::pi)) / (1.2 * 1.2) *
+      (1.0 + 6.0 * kernel::CubicSpline::f(1.0 / 1.2) + 6.0 * kernel::CubicSpline::f(std::sqrt(3.0) / 1.2) +
+       6.0 * kernel::CubicSpline::f(2.0 / 1.2));
+  CHECK(kernel::hexagonal_lattice_sum<kernel::CubicSpline>(1.2) == Approx(hexagonal_by_hand).epsilon(1e-14));
 }
 
 namespace {

@@ -68,6 +68,28 @@ TEST_CASE("the eta^2 softening factor of the Meglicki relation, per kernel", "[p
   CHECK(physics::square_lattice_factor<kernel::CubicSpline>(1.0, 0.01) == Approx(0.659).margin(0.002));
   CHECK(physics::square_lattice_factor<kernel::CubicSpline>(3.0, 0.01) == Approx(cubic).margin(0.01));
   CHECK(physics::meglicki_constant<3>() == 10.0);
+  // on a hexagonal lattice too, tending to the continuum
+  CHECK(physics::hexagonal_lattice_factor<kernel::CubicSpline>(3.0, 0.01) == Approx(cubic).margin(0.01));
+  CHECK(physics::hexagonal_lattice_factor<kernel::CubicSpline>(1.6, 0.01) > 0.8);
+}
+
+TEST_CASE("lattice offsets: the hexagonal lattice's fourth moments are isotropic, the square one's are not",
+          "[physics]") {
+  // sum g(r) x^4 = 3 sum g(r) x^2 y^2 holds for any radial weight g on a six-fold symmetric lattice: the
+  // reason the MG operator needs no direction-dependent calibration there.
+  auto moments = [](bool hexagonal) {
+    double x4 = 0.0, x2y2 = 0.0;
+    kernel::for_each_lattice_offset(hexagonal, 1.6, [&](const Vec<2>& o) {
+      const double g = kernel::W<kernel::CubicSpline, 2>(o.norm(), 0.8);  // nearest neighbours and diagonals
+      x4 += g * std::pow(o.x(), 4);
+      x2y2 += g * o.x() * o.x() * o.y() * o.y();
+    });
+    return std::pair{x4, x2y2};
+  };
+  const auto [hex_x4, hex_x2y2] = moments(true);
+  CHECK(hex_x4 == Approx(3.0 * hex_x2y2).epsilon(1e-12));
+  const auto [square_x4, square_x2y2] = moments(false);
+  CHECK(std::abs(square_x4 / (3.0 * square_x2y2) - 1.0) > 0.1);
 }
 
 TEST_CASE("MG shear viscosity with alpha c h = 8 nu / f reproduces nu on a decaying shear flow", "[physics]") {

@@ -6,6 +6,7 @@
 #include "rsph/kernel/kernel.hpp"
 
 #include <cmath>
+#include <numbers>
 
 namespace rsph::kernel {
 
@@ -26,6 +27,31 @@ double lattice_sum(double h_over_dx) {
         for (int k = -reach; k <= reach; ++k) sum += W<K, 3>(std::sqrt(double(i * i + j * j + k * k)), h_over_dx);
   }
   return sum;
+}
+
+/// The sites of a 2D lattice of unit spacing within `radius` of a site: f(x) for each offset x = i a1 + j a2
+/// (the site itself included), with a1 = (1, 0) and a2 = (0, 1) (square) or (1/2, sqrt(3)/2) (hexagonal:
+/// nearest neighbours at distance 1, cells of area sqrt(3)/2).
+template <class F>
+void for_each_lattice_offset(bool hexagonal, double radius, F&& f) {
+  const double a2x = hexagonal ? 0.5 : 0.0, a2y = hexagonal ? std::numbers::sqrt3 / 2.0 : 1.0;
+  const int rows = static_cast<int>(std::ceil(radius / a2y)) + 1, columns = static_cast<int>(std::ceil(radius)) + 2;
+  for (int j = -rows; j <= rows; ++j)
+    for (int i = -columns; i <= columns; ++i) {
+      const Vec<2> x(i + j * a2x, j * a2y);
+      if (x.norm() <= radius) f(x);
+    }
+}
+
+/// The cell area times sum over a hexagonal lattice (nearest-neighbour distance dx) of W(x_j, h), h =
+/// h_over_dx * dx: the hexagonal counterpart of lattice_sum<K, 2>, whose cells have area sqrt(3)/2 dx^2.
+/// A scene that puts mass rho (sqrt(3)/2) dx^2 / this on each site has SPH density rho.
+template <class K>
+requires SmoothingKernel<K, 2>
+double hexagonal_lattice_sum(double h_over_dx) {
+  double sum = 0.0;
+  for_each_lattice_offset(true, K::support * h_over_dx, [&](const Vec<2>& x) { sum += W<K, 2>(x.norm(), h_over_dx); });
+  return std::numbers::sqrt3 / 2.0 * sum;
 }
 
 }  // namespace rsph::kernel

@@ -7,9 +7,11 @@
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/kernel/kernel.hpp"
+#include "rsph/kernel/lattice_sum.hpp"
 #include "rsph/physics/pair.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <string>
 
 namespace rsph::physics {
@@ -48,17 +50,26 @@ double eta_softening_factor(double eta2) {
 /// the continuum value without softening: sum_b Delta^2 x^2 y^2 W'(r) / (r (r^2 + eta^2)) / (-1/4).
 /// RSPH particles sit on or near their lattice, where this -- not the continuum -- is the operator's
 /// strength: 0.66 for the cubic spline at h/Delta = 1.0, 0.79 at 1.2, 0.95 at 1.6 (table in the README).
+/// `hexagonal`: the same over a hexagonal lattice of nearest-neighbour distance Delta (cells of area
+/// sqrt(3)/2 Delta^2), whose six-fold symmetry makes the sum isotropic.
+template <class Kernel>
+double lattice_factor(double h_over_dx, double eta2, bool hexagonal) {
+  const double dx = 1.0 / h_over_dx;  // h = 1
+  const double cell_area = (hexagonal ? (std::numbers::sqrt3 / 2.0) : 1.0) * dx * dx;
+  double sum = 0.0;
+  kernel::for_each_lattice_offset(hexagonal, Kernel::support * h_over_dx, [&](const Vec<2>& offset) {
+    const double x = offset.x() * dx, y = offset.y() * dx, r = std::hypot(x, y);
+    if (r > 0.0) sum += cell_area * x * x * y * y * kernel::dW_dr<Kernel, 2>(r, 1.0) / (r * (r * r + eta2));
+  });
+  return sum / -0.25;
+}
 template <class Kernel>
 double square_lattice_factor(double h_over_dx, double eta2) {
-  const double dx = 1.0 / h_over_dx;  // h = 1
-  const int n = static_cast<int>(std::ceil(Kernel::support * h_over_dx)) + 1;
-  double sum = 0.0;
-  for (int i = -n; i <= n; ++i)
-    for (int j = -n; j <= n; ++j) {
-      const double x = i * dx, y = j * dx, r = std::hypot(x, y);
-      if (r > 0.0) sum += dx * dx * x * x * y * y * kernel::dW_dr<Kernel, 2>(r, 1.0) / (r * (r * r + eta2));
-    }
-  return sum / -0.25;
+  return lattice_factor<Kernel>(h_over_dx, eta2, false);
+}
+template <class Kernel>
+double hexagonal_lattice_factor(double h_over_dx, double eta2) {
+  return lattice_factor<Kernel>(h_over_dx, eta2, true);
 }
 
 /// Monaghan & Gingold (1983) viscosity on all pairs, approaching and receding, as a shear viscosity nu:
@@ -84,6 +95,10 @@ struct ShearViscosityMG {
   /// Calibrated for particles on a square lattice with the given h/Delta (2D).
   static ShearViscosityMG on_square_lattice(double nu_s, double h_over_dx, double eta2_ = 0.01) requires(D == 2) {
     return {nu_s, square_lattice_factor<Kernel>(h_over_dx, eta2_), eta2_};
+  }
+  /// Calibrated for particles on a hexagonal lattice with the given h/Delta (Delta: nearest-neighbour distance).
+  static ShearViscosityMG on_hexagonal_lattice(double nu_s, double h_over_dx, double eta2_ = 0.01) requires(D == 2) {
+    return {nu_s, hexagonal_lattice_factor<Kernel>(h_over_dx, eta2_), eta2_};
   }
 
   void validate() const {
