@@ -29,9 +29,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_BIN = os.path.join(HERE, "..", "build", "bin", "rsph-viscous-ring")
 
 
-def run_name(cycle, hdx, h, viscosity, max_bin=0):
+def run_name(cycle, hdx, h, viscosity, max_bin=0, lattice="square"):
     bins = f"_bins{max_bin}" if max_bin > 0 else ""
-    return f"c{cycle}_hdx{hdx:g}_h{h:g}_{viscosity}{bins}"
+    hexagons = "_hex" if lattice == "hexagonal" else ""
+    return f"c{cycle}_hdx{hdx:g}_h{h:g}_{viscosity}{bins}{hexagons}"
 
 
 def errorbar(ax, xs, runs, key, label):
@@ -60,6 +61,7 @@ def main():
     ap.add_argument("--viscosity", default="mg", help="mg or ns")
     ap.add_argument("--preset", default="paper", help="passed on: quick uses nu = 4.8e-4")
     ap.add_argument("--max-bin", type=int, default=0, help="passed on: individual time steps (mg only)")
+    ap.add_argument("--lattice", default="square", help="passed on: square or hexagonal")
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 2)
     ap.add_argument("--rerun", action="store_true")
     ap.add_argument("--plot-only", action="store_true")
@@ -79,14 +81,14 @@ def main():
     futures = {}
     with cf.ThreadPoolExecutor(max_workers=args.jobs) as pool:
         for c, r, h in grid:
-            folder = os.path.join(args.out, run_name(c, r, h, args.viscosity, args.max_bin))
+            folder = os.path.join(args.out, run_name(c, r, h, args.viscosity, args.max_bin, args.lattice))
             if args.plot_only:
                 if os.path.exists(os.path.join(folder, "summary.json")):
                     with open(os.path.join(folder, "summary.json")) as f:
                         results[(c, r, h)] = json.load(f)
                 continue
             cli = ["--cycle", c, "--h-over-dx", r, "--h", h, "--viscosity", args.viscosity, "--preset", args.preset,
-                   "--max-bin", args.max_bin]
+                   "--max-bin", args.max_bin, "--lattice", args.lattice]
             futures[pool.submit(run_example, args.binary, folder, cli, args.rerun)] = (c, r, h)
         for fut in cf.as_completed(futures):
             key = futures[fut]
@@ -143,7 +145,7 @@ def main():
     fig, axes = plt.subplots(len(panels), 1, figsize=(8, 12))
     for ax, (name, keys) in zip(axes, panels):
         for i, key in enumerate(k for k in keys if k in results):
-            folder = os.path.join(args.out, run_name(*key, args.viscosity, args.max_bin))
+            folder = os.path.join(args.out, run_name(*key, args.viscosity, args.max_bin, args.lattice))
             p = read_csv(os.path.join(folder, "profile_2.csv"))
             value = {"c_r": key[0], "h/Δ": key[1], "h": key[2]}[name]
             line, = ax.plot(p["x"], p["sigma_mean"], lw=1.2, label=f"{name}={value:g}")
