@@ -8,7 +8,7 @@ using namespace rsph;
 
 namespace {
 
-scenes::RingRun run_ring(int cycle, const std::string& viscosity = "mg") {
+scenes::RingRun run_ring(int cycle, const std::string& viscosity = "mg", const std::string& lattice = "square") {
   scenes::ViscousRingParams s;
   s.nu = 2e-3;
   s.h = 0.04;
@@ -19,6 +19,7 @@ scenes::RingRun run_ring(int cycle, const std::string& viscosity = "mg") {
   s.inner_radius = 0.3;
   s.bin_width = 0.02;
   s.viscosity = viscosity;
+  s.lattice = lattice;
   return scenes::run_viscous_ring(
       s, [](const auto&) {}, [](const auto&, int) {});
 }
@@ -76,4 +77,17 @@ TEST_CASE("viscous ring: the Navier-Stokes stress spreads the ring too", "[examp
   CHECK(ns.max_mass_error < 1e-12);
   CHECK(ns.nu_eff / 2e-3 > 0.7);
   CHECK(ns.nu_eff / 2e-3 < 2.5);
+}
+
+TEST_CASE("viscous ring on a hexagonal lattice: regularization conserves mass and the ring spreads at about nu_s",
+          "[examples][ring]") {
+  const auto square = run_ring(1);
+  const auto hexagonal = run_ring(1, "mg", "hexagonal");
+  INFO("nu_eff / nu_s: square " << square.nu_eff / 2e-3 << ", hexagonal " << hexagonal.nu_eff / 2e-3 << "; noise "
+                                << square.noise_error << ", " << hexagonal.noise_error);
+  CHECK(hexagonal.max_mass_error < 1e-12);
+  CHECK(hexagonal.regularizations > 20);  // every 4 steps, as the square run (45)
+  CHECK(hexagonal.particles_initial > square.particles_initial);  // 2/sqrt(3) times the sites at the same h/Delta
+  CHECK(hexagonal.nu_eff / 2e-3 > 0.8);
+  CHECK(hexagonal.nu_eff / 2e-3 < 2.0);
 }
