@@ -86,6 +86,8 @@ int main(int argc, char** argv) {
         "low (48 000 particles), med (108 000) or high (191 000)")(
         "particles", ex::po::value(&s.particles), "particle count over the disk (overrides --resolution)")(
         "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(s.h_over_dx), "RSPH: h / Delta; SPH: eta")(
+        "lattice", ex::po::value(&s.lattice)->default_value(s.lattice),
+        "square or hexagonal: the start and RSPH's regularization lattice (the same particle count)")(
         "orbits", ex::po::value(&s.orbits)->default_value(s.orbits), "planet orbits to run")(
         "zone-width", ex::po::value(&s.zone_width)->default_value(s.zone_width),
         "width of the boundary zones on fixed orbits at both edges")(
@@ -167,6 +169,7 @@ int main(int argc, char** argv) {
     summary.set("test", "planet_disk").set("method", s.method).set("eos", s.eos).set("q", s.q);
     summary.set("max_bin", s.rsph() ? s.max_bin : 0);
     summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
+    summary.set("lattice", s.lattice);
     summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
     summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);
     summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final).set("mass_removed", r.mass_removed);

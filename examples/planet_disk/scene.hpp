@@ -13,6 +13,7 @@
 #include <cmath>
 #include <numbers>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace rsph::scenes {
@@ -23,6 +24,7 @@ struct PlanetDiskParams {
   std::string method = "rsph";     ///< rsph: regularized, no artificial viscosity; sph: grad-h SPH
   double particles = 48000;        ///< target particle count over the disk (LOW 48 000, MED 108 000, HIGH 191 000)
   double h_over_dx = 1.4;          ///< RSPH: h / Delta; SPH: eta of h = eta (m / rho)^(1/2)
+  std::string lattice = "square";  ///< the lattice of the start and of RSPH's regularization: square or hexagonal
   double orbits = 100.0;           ///< planet orbits to run
   double r_in = 0.4, r_out = 2.5;  ///< the disk
   double zone_width = 0.1;         ///< width of the boundary zones on fixed orbits
@@ -46,6 +48,8 @@ struct PlanetDiskParams {
     require(eos == "isothermal" || eos == "polytropic",
             "planet disk: unknown equation of state '" + eos + "' (isothermal, polytropic)");
     require(method == "rsph" || method == "sph", "planet disk: unknown method '" + method + "' (rsph, sph)");
+    require(lattice == "square" || lattice == "hexagonal",
+            "planet disk: unknown lattice '" + lattice + "' (square, hexagonal)");
     require(particles >= 100.0, "planet disk: need at least 100 particles (got " + std::to_string(particles) + ")");
     require(h_over_dx > 0.0, "planet disk: h/dx must be positive (got " + std::to_string(h_over_dx) + ")");
     require(orbits > 0.0, "planet disk: the number of orbits must be positive");
@@ -62,7 +66,11 @@ struct PlanetDiskParams {
   }
   bool rsph() const { return method == "rsph"; }
   double area() const { return std::numbers::pi * (r_out * r_out - r_in * r_in); }
-  double spacing() const { return std::sqrt(area() / particles); }
+  /// Delta for the particle count: the square's side, or the hexagonal lattice's nearest-neighbour distance
+  /// (cells of area sqrt(3)/2 Delta^2), so both lattices hold about `particles`.
+  double spacing() const {
+    return std::sqrt(area() / particles / (lattice == "hexagonal" ? std::numbers::sqrt3 / 2.0 : 1.0));
+  }
   double h() const { return h_over_dx * spacing(); }
   physics::StarAndPlanet star_planet() const { return {1.0, q, 1.0, softening, ramp_orbits}; }
   double period() const { return star_planet().period(); }
@@ -95,13 +103,16 @@ struct DiskPolytropicK {
   }
 };
 
-/// Square-lattice sites in r_in <= r <= r_out on circular orbits. RSPH masses carry the kernel's lattice
-/// sum, so rho = Sigma_0 in the bulk at h = (h/Delta) Delta; SPH particles have equal masses Sigma_0 Delta^2.
-inline ParticleSet<2, false> disk_particles(const PlanetDiskParams& s) {
+/// Lattice sites in r_in <= r <= r_out on circular orbits. RSPH masses carry the cell area over the kernel's
+/// lattice sum, so rho = Sigma_0 in the bulk at h = (h/Delta) Delta; SPH particles have equal masses Sigma_0
+/// times the cell area.
+template <class Lattice>
+ParticleSet<2, false> disk_particles_on(const PlanetDiskParams& s, const Lattice& lat) {
   s.validate();
-  const double dx = s.spacing();
-  const double bias = s.rsph() ? kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx) : 1.0;
-  const lattice::Square lat{dx};
+  constexpr bool hexagonal = std::is_same_v<Lattice, lattice::Hexagonal>;
+  const double bias = !s.rsph()   ? 1.0
+                      : hexagonal ? kernel::hexagonal_lattice_sum<kernel::CubicSpline>(s.h_over_dx)
+                                  : kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
   const Box<2> box = s.box();
   const auto range = lat.cells_touching(box, Vec<2>(-s.r_out, -s.r_out), Vec<2>(s.r_out, s.r_out));
   const auto zones = s.zones();
@@ -111,10 +122,14 @@ inline ParticleSet<2, false> disk_particles(const PlanetDiskParams& s) {
       const Vec<2> x = lat.site(box, {i, j});
       const double r = x.norm();
       if (r < s.r_in || r > s.r_out) continue;
-      p.add(s.sigma0 * dx * dx / bias, x, zones.velocity(x), s.h());
+      p.add(s.sigma0 * lat.cell_volume() / bias, x, zones.velocity(x), s.h());
     }
   require(p.n_real > 0, "planet disk: the annulus holds no lattice site");
   return p;
+}
+inline ParticleSet<2, false> disk_particles(const PlanetDiskParams& s) {
+  if (s.lattice == "hexagonal") return disk_particles_on(s, lattice::Hexagonal{s.spacing()});
+  return disk_particles_on(s, lattice::Square{s.spacing()});
 }
 
 /// One measurement of the disk.
@@ -203,8 +218,8 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
   return r;
 }
 
-template <class EOS, class Run>
-auto with_method(const PlanetDiskParams& s, EOS eos, Run&& run) {
+template <class Lattice, class EOS, class Run>
+auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& run) {
   using K = kernel::CubicSpline;
   TimeStepParams ts;
   ts.courant = s.courant;
@@ -213,24 +228,30 @@ auto with_method(const PlanetDiskParams& s, EOS eos, Run&& run) {
   const auto zones = s.zones();
   if (s.rsph()) {
     ts.max_bin = s.max_bin;
-    using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<K, 2>, geometry::LocalVoronoi,
-                                               region::Annulus>;
+    using Reg =
+        regularize::LatticeRegularizer<Lattice, schedule::Adaptive<K, 2>, geometry::LocalVoronoi, region::Annulus>;
     // Edge cells are closed at 0.75 Delta along the edge and by the disk's circles across it, and a new
     // cell less than half covered hands its share on: the edges stay where the disk ends.
     const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-    Reg reg(lattice::Square{s.spacing()},
-            schedule::Adaptive<K, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)}, remap, {},
-            region::Annulus{s.r_in, s.r_out});
+    Reg reg(lat, schedule::Adaptive<K, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)}, remap,
+            {}, region::Annulus{s.r_in, s.r_out});
     Simulation<2, K, EOS, Reg, physics::StarAndPlanet, boundary::KeplerianZones> sim(
-        disk_particles(s), s.box(), std::move(eos), std::move(reg), ts, gravity, zones);
+        disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg), ts, gravity, zones);
     return run(sim);
   } else {
     Simulation<2, K, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity, physics::StarAndPlanet,
                boundary::KeplerianZones>
-        sim(disk_particles(s), s.box(), std::move(eos), {}, ts, physics::GradH<2>{s.h_over_dx},
+        sim(disk_particles_on(s, lat), s.box(), std::move(eos), {}, ts, physics::GradH<2>{s.h_over_dx},
             physics::ArtificialViscosity{s.alpha, s.beta}, gravity, zones);
     return run(sim);
   }
+}
+
+/// with_method on the scene's lattice.
+template <class EOS, class Run>
+auto on_lattice(const PlanetDiskParams& s, EOS eos, Run&& run) {
+  if (s.lattice == "hexagonal") return with_method(s, lattice::Hexagonal{s.spacing()}, std::move(eos), run);
+  return with_method(s, lattice::Square{s.spacing()}, std::move(eos), run);
 }
 
 }  // namespace detail
@@ -243,9 +264,9 @@ DiskRun run_planet_disk(const PlanetDiskParams& s, OnStep&& on_step, OnSample&& 
   const DiskSoundSpeed cs{s.aspect, 1.0};
   auto run = [&](auto& sim) { return detail::run_disk(sim, s, on_step, on_sample); };
   if (s.eos == "polytropic")
-    return detail::with_method(s, eos::Polytropic<DiskPolytropicK>(s.gamma, DiskPolytropicK{cs, s.gamma, s.sigma0}),
-                               run);
-  return detail::with_method(s, eos::LocallyIsothermal<DiskSoundSpeed>(cs), run);
+    return detail::on_lattice(s, eos::Polytropic<DiskPolytropicK>(s.gamma, DiskPolytropicK{cs, s.gamma, s.sigma0}),
+                              run);
+  return detail::on_lattice(s, eos::LocallyIsothermal<DiskSoundSpeed>(cs), run);
 }
 
 }  // namespace rsph::scenes

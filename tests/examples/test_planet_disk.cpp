@@ -77,6 +77,13 @@ TEST_CASE("planet disk: the initial lattice disk holds Sigma_0 and sits in equil
   for (std::size_t i = 0; i < profile.r.size(); ++i)
     if (profile.r[i] > 0.6 && profile.r[i] < 2.3) CHECK(std::abs(profile.sigma[i] - 1.0) < 0.01);
   CHECK(profile.gap_depth > 0.99);
+  // on hexagons: the same particle count and Sigma_0
+  s.lattice = "hexagonal";
+  const auto q = scenes::disk_particles(s);
+  CHECK(std::abs(static_cast<double>(q.n_real) / 8000.0 - 1.0) < 0.01);
+  const auto hexagonal = scenes::disk_profile(q, s);
+  for (std::size_t i = 0; i < hexagonal.r.size(); ++i)
+    if (hexagonal.r[i] > 0.6 && hexagonal.r[i] < 2.3) CHECK(std::abs(hexagonal.sigma[i] - 1.0) < 0.01);
 }
 
 TEST_CASE("planet disk, reduced: mass kept, no NaN, and the gap deepens after the ramp", "[examples][disk]") {
@@ -129,4 +136,23 @@ TEST_CASE("planet disk, reduced: grad-h SPH with artificial viscosity runs the s
   CHECK(r.regularizations == 0);
   CHECK(r.max_mass_error < 1e-12);
   CHECK(r.samples.back().gap_depth > 0.9);
+}
+
+TEST_CASE("planet disk, reduced, on a hexagonal lattice: mass kept and the gap opens", "[examples][disk]") {
+  scenes::PlanetDiskParams s;
+  s.particles = 8000;
+  s.orbits = 14.0;
+  s.lattice = "hexagonal";
+  const auto r = scenes::run_planet_disk(
+      s, [](const auto&) {}, [](const auto&, const scenes::DiskSample&) {});
+  REQUIRE(r.samples.size() == 15);
+  auto mean_depth = [&](std::size_t first) {
+    return (r.samples[first].gap_depth + r.samples[first + 1].gap_depth + r.samples[first + 2].gap_depth) / 3.0;
+  };
+  INFO("gap depth, mean over orbits 5-7 and 11-13: " << mean_depth(5) << ", " << mean_depth(11));
+  CHECK(r.max_mass_error < 1e-12);
+  CHECK(r.mass_removed < 1e-3 * r.mass_initial);
+  CHECK(r.regularizations > 30);
+  CHECK(r.samples[0].gap_depth > 0.99);
+  CHECK(mean_depth(11) < mean_depth(5) - 0.02);
 }
