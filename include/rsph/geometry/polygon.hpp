@@ -242,15 +242,17 @@ inline ConvexPolygon clip_convex(const ConvexPolygon& p, const ConvexPolygon& wi
   return cur;
 }
 
-/// The sides of a convex polygon (counter-clockwise) as outward normals and offsets: x is inside when
-/// normal[k] . x <= offset[k] for every k. A lattice whose cells are all translates of one shape clips by
-/// these, each offset moved to the cell's site.
+/// The sides of a convex polygon of at most 32 sides (counter-clockwise) as outward normals and offsets: x is
+/// inside when normal[k] . x <= offset[k] for every k. Polygons that are moved or scaled keep the normals
+/// and take their offsets anew (with_part_within_sides), so the normals are computed once.
 struct Sides {
-  std::array<Point, ConvexPolygon::capacity> normal;
-  std::array<double, ConvexPolygon::capacity> offset;
+  static constexpr int capacity = 32;  ///< sides are picked by the bits of a 32-bit mask
+  std::array<Point, capacity> normal;
+  std::array<double, capacity> offset;
   int n = 0;
 };
 inline Sides sides_of(const ConvexPolygon& shape) {
+  if (shape.n > Sides::capacity) throw NumericalError("sides_of: more than 32 sides");
   Sides s;
   s.n = shape.n;
   for (int i = 0, j = shape.n - 1; i < shape.n; j = i++) {
@@ -262,18 +264,18 @@ inline Sides sides_of(const ConvexPolygon& shape) {
   return s;
 }
 
-/// f(the part of p inside the sides k of `sides` whose bit is set in `cutting`, moved by `shift`: offset[k] +
-/// normal[k] . shift), for sides.n <= 32; the other sides must not cut p. A side that no vertex of the part
-/// left so far lies beyond is passed over without a copy.
-template <class F>
-auto with_part_within_sides(const ConvexPolygon& p, const Sides& sides, const Point& shift, std::uint32_t cutting,
+/// f(the part of p inside the sides k of `sides` whose bit is set in `cutting`, side k at offset_of(k)), cut
+/// in increasing k; the other sides must not cut p. A side that no vertex of the part left so far lies
+/// beyond is passed over without a copy.
+template <class OffsetOf, class F>
+auto with_part_within_sides(const ConvexPolygon& p, const Sides& sides, std::uint32_t cutting, OffsetOf&& offset_of,
                             F&& f) {
   ConvexPolygon buffers[2];
   const ConvexPolygon* cut = &p;
   int next = 0;
   for (; cutting != 0 && cut->n >= 3; cutting &= cutting - 1) {
     const auto k = static_cast<std::size_t>(std::countr_zero(cutting));
-    if (detail::cut_halfplane(*cut, sides.normal[k], sides.offset[k] + sides.normal[k].dot(shift), buffers[next])) {
+    if (detail::cut_halfplane(*cut, sides.normal[k], offset_of(k), buffers[next])) {
       cut = &buffers[next];
       next ^= 1;
     }
@@ -281,15 +283,17 @@ auto with_part_within_sides(const ConvexPolygon& p, const Sides& sides, const Po
   return f(*cut);
 }
 
-/// Area of the part of p that with_part_within_sides gives.
+/// Area of the part of p inside the sides set in `cutting`, the polygon of `sides` moved by `shift`.
 inline double area_within_sides(const ConvexPolygon& p, const Sides& sides, const Point& shift, std::uint32_t cutting) {
-  return with_part_within_sides(p, sides, shift, cutting, [](const ConvexPolygon& part) { return area(part); });
+  return with_part_within_sides(
+      p, sides, cutting, [&](std::size_t k) { return sides.offset[k] + sides.normal[k].dot(shift); },
+      [](const ConvexPolygon& part) { return area(part); });
 }
 
 /// Area of p inside the convex polygon `window` (counter-clockwise): area(clip_convex(p, window)) to the bit,
 /// without a copy for the sides no vertex of p lies beyond.
 inline double intersection_area(const ConvexPolygon& p, const ConvexPolygon& window) {
-  if (window.n > 32) return area(clip_convex(p, window));
+  if (window.n > Sides::capacity) return area(clip_convex(p, window));
   const std::uint32_t all = window.n == 32 ? ~std::uint32_t{0} : (std::uint32_t{1} << window.n) - 1;
   return area_within_sides(p, sides_of(window), Point::Zero(), all);
 }

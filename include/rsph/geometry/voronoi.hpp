@@ -113,26 +113,22 @@ inline bool cut_by_bisector(const ConvexPolygon& in, const Point& d, ConvexPolyg
   return cut_halfplane(in, d, 0.5 * d.squaredNorm(), out);
 }
 
-/// The edge normals of the regular 32-gon that closes cells at open edges, computed once: on a sheared disk
-/// closed at 0.75 spacings a fifth of the cells reach past the disc, and their sines and cosines, taken per
-/// cell, had cost a fifth of the remap.
-struct ClosingPolygon {
-  static constexpr int sides = 32;
-  std::array<double, sides> nx, ny;
-
-  static const ClosingPolygon& get() {
-    static const ClosingPolygon table = [] {
-      ClosingPolygon t{};
-      for (int k = 0; k < sides; ++k) {
-        const double phi = 2.0 * std::numbers::pi * (k + 0.5) / sides;
-        t.nx[static_cast<std::size_t>(k)] = std::cos(phi);
-        t.ny[static_cast<std::size_t>(k)] = std::sin(phi);
-      }
-      return t;
-    }();
-    return table;
-  }
-};
+/// The unit edge normals of the regular 32-gon that closes cells at open edges, computed once: on a sheared
+/// disk closed at 0.75 spacings a fifth of the cells reach past the disc, and their sines and cosines, taken
+/// per cell, had cost a fifth of the remap. Side k lies at the closing radius along its normal.
+inline const Sides& closing_polygon() {
+  static const Sides table = [] {
+    Sides t;
+    t.n = Sides::capacity;
+    for (int k = 0; k < t.n; ++k) {
+      const double phi = 2.0 * std::numbers::pi * (k + 0.5) / t.n;
+      t.normal[static_cast<std::size_t>(k)] = Point(std::cos(phi), std::sin(phi));
+      t.offset[static_cast<std::size_t>(k)] = 1.0;
+    }
+    return t;
+  }();
+  return table;
+}
 
 /// Open axes: intersects the cell with a regular 32-gon whose inradius is the closing radius. Only the
 /// sides some vertex lies beyond are tried: a side no vertex crosses cannot cut the cell (nor the points
@@ -140,20 +136,19 @@ struct ClosingPolygon {
 inline void close_with_disc(ConvexPolygon*& cell, ConvexPolygon*& scratch, const Box<2>& box, double closing_radius) {
   if (box.edge[0] != Edge::open && box.edge[1] != Edge::open) return;
   const double R2 = closing_radius * closing_radius;
-  const ClosingPolygon& polygon = ClosingPolygon::get();
+  const Sides& polygon = closing_polygon();
   std::uint32_t crossed = 0;  // bit k: some vertex lies beyond side k
   for (int i = 0; i < cell->n; ++i) {
     const Point& v = (*cell)[i];
     if (v.squaredNorm() <= R2) continue;
-    for (int k = 0; k < ClosingPolygon::sides; ++k) {
-      const auto kk = static_cast<std::size_t>(k);
-      crossed |= static_cast<std::uint32_t>(polygon.nx[kk] * v.x() + polygon.ny[kk] * v.y() > closing_radius) << k;
-    }
+    for (int k = 0; k < polygon.n; ++k)
+      crossed |= static_cast<std::uint32_t>(polygon.normal[static_cast<std::size_t>(k)].dot(v) > closing_radius) << k;
   }
-  for (; crossed != 0 && !cell->empty(); crossed &= crossed - 1) {
-    const auto k = static_cast<std::size_t>(std::countr_zero(crossed));
-    if (cut_halfplane(*cell, Point(polygon.nx[k], polygon.ny[k]), closing_radius, *scratch)) std::swap(cell, scratch);
-  }
+  if (crossed == 0) return;
+  *scratch = with_part_within_sides(
+      *cell, polygon, crossed, [&](std::size_t k) { return closing_radius * polygon.offset[k]; },
+      [](const ConvexPolygon& part) { return part; });
+  std::swap(cell, scratch);
 }
 
 /// Mean spacing of n points in the box (open axes: their bounding box).

@@ -279,7 +279,8 @@ CellSides<Lattice> cell_sides(const Lattice& lattice) {
         "a lattice whose cells are not rectangles needs `geometry::ConvexPolygon cell_shape() const`: the "
         "cell around its site, every cell being that shape moved to its site");
     const geometry::ConvexPolygon shape = lattice.cell_shape();
-    require(shape.n >= 3 && shape.n <= 32, "regularization: a lattice's cell shape needs 3 to 32 sides");
+    require(shape.n >= 3 && shape.n <= geometry::Sides::capacity,
+            "regularization: a lattice's cell shape needs 3 to 32 sides");
     return geometry::sides_of(shape);
   }
 }
@@ -409,7 +410,7 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
         // Every lattice cell is the lattice's shape moved to its site, so all have the same side normals: the
         // old cell's extent along each, taken once, tells for each candidate which sides cut the old cell
         // and whether one keeps them apart, before any clipping (many in the rectangular index range are).
-        std::array<double, 32> reach_lo, reach_hi;
+        std::array<double, geometry::Sides::capacity> reach_lo, reach_hi;
         for (int k = 0; k < sides.n; ++k) {
           const auto kk = static_cast<std::size_t>(k);
           reach_lo[kk] = std::numeric_limits<double>::max();
@@ -436,8 +437,9 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
               std::array<Share, 8> shares;
               const std::size_t n_shares = share_beyond_wall(
                   {i, j},
-                  geometry::with_part_within_sides(cell, sides, site, cutting,
-                                                   [](const geometry::ConvexPolygon& part) { return part; }),
+                  geometry::with_part_within_sides(
+                      cell, sides, cutting, [&](std::size_t k) { return sides.offset[k] + sides.normal[k].dot(site); },
+                      [](const geometry::ConvexPolygon& part) { return part; }),
                   xo, shares);
               for (std::size_t k = 0; k < n_shares; ++k)
                 if (shares[k].second > 0.0)
