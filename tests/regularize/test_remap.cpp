@@ -248,6 +248,43 @@ TEST_CASE("open edges: cells closed by discs; nearly empty cells hand their shar
   CHECK(hexagonal.n_after > 100);
 }
 
+TEST_CASE("a shear interface between rows offset by s Delta exchanges s (1 - s) / 8 of each cell per remap",
+          "[regularize]") {
+  // Two lattice half-planes sliding past each other (the Kelvin-Helmholtz interface between remaps): the
+  // upper rows are offset by s Delta in x. The Voronoi cells of the two interface rows meet along a zigzag,
+  // not along the lattice line between them: each cell reaches a triangle of area s (1 - s) / 8 Delta^2
+  // into the other row's new cells and gives up as much of its own. The remap thus mixes that fraction of
+  // momentum across the interface every time, whatever the flow does between remaps (none at s = 0).
+  const int n = 16;
+  const double dx = 1.0 / n, U = 1.0;
+  for (double s : {0.0, 0.25, 0.5, 0.7}) {
+    ParticleSet<2, true> p;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const bool upper = j >= n / 2;
+        Vec<2> x((i + 0.5 + (upper ? s : 0.0)) * dx, (j + 0.5) * dx);
+        x[0] = std::fmod(x[0], 1.0);
+        p.add(dx * dx, x, Vec<2>(upper ? -U : U, 0.0), 1.2 * dx, 1.0);
+      }
+    const auto stats = check_conserving_remap(p, box_with(Edge::periodic, Edge::reflecting), lattice::Square{dx});
+    REQUIRE(p.n_real == static_cast<std::size_t>(n * n));
+    const double f = s * (1.0 - s) / 8.0;
+    INFO("s = " << s << ", exchanged fraction " << f);
+    for (std::size_t a = 0; a < p.n_real; ++a) {
+      const int row = static_cast<int>(std::floor(p.x[a][1] / dx));
+      const double expected = row == n / 2 - 1 ? U * (1.0 - 2.0 * f)
+                              : row == n / 2   ? -U * (1.0 - 2.0 * f)
+                              : row < n / 2    ? U
+                                               : -U;
+      CHECK(p.m[a] == Approx(dx * dx).epsilon(1e-12));
+      CHECK(p.v[a][0] == Approx(expected).margin(1e-12));
+      CHECK(std::abs(p.v[a][1]) < 1e-12);
+    }
+    // per column, the two interface cells lose m U^2 (1 - (1 - 2 f)^2) of kinetic energy to heat
+    CHECK(stats.kinetic_converted == Approx(n * dx * dx * U * U * 4.0 * f * (1.0 - f)).margin(1e-14));
+  }
+}
+
 TEST_CASE("1D remap: a shift by one spacing keeps a profile, half a spacing diffuses most", "[regularize]") {
   auto pulse = [](double shift) {
     ParticleSet<1, true> p;
