@@ -1,6 +1,7 @@
 #pragma once
-// Measuring a disk: the SPH surface density at arbitrary points, on an (r, phi) grid and averaged over phi, and
-// the spiral wake of a planet in the linear theory of Ogilvie & Lubow (2002).
+// Measuring a disk: the SPH surface density at arbitrary points (any 2D box), on an (r, phi) grid and averaged over
+// phi, and the spiral wake of a planet in the linear theory of Ogilvie & Lubow (2002).
+#include "rsph/boundary/ghosts.hpp"
 #include "rsph/core/dimension.hpp"
 #include "rsph/kernel/kernel.hpp"
 #include "rsph/neighbors/cell_list.hpp"
@@ -12,13 +13,17 @@
 
 namespace rsph::analysis {
 
-/// Sigma(x) = sum_b m_b W(|x - x_b|, h_b) at each point (the real particles only).
+/// Sigma(x) = sum_b m_b W(|x - x_b|, h_b) at each point, over the real particles and, for the periodic and
+/// reflecting axes of `box`, their images (boundary::make_ghosts), so points near those faces miss nothing.
+/// The default box is open: the real particles alone.
 template <class Kernel, class Particles>
-std::vector<double> interpolate_density(const Particles& p, const std::vector<Vec<2>>& points) {
-  std::vector<Vec<2>> x(p.x.begin(), p.x.begin() + static_cast<std::ptrdiff_t>(p.n_real));
+std::vector<double> interpolate_density(const Particles& p, const std::vector<Vec<2>>& points, const Box<2>& box = {}) {
   double h_max = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) h_max = std::max(h_max, p.h[a]);
   const double reach = Kernel::support * h_max;
+  Particles with_images = p;
+  boundary::make_ghosts(with_images, box, reach);
+  const auto& x = with_images.x;
   neighbors::CellList<2> cells;
   cells.build(x, reach);
   std::vector<double> sigma(points.size(), 0.0);
@@ -29,7 +34,8 @@ std::vector<double> interpolate_density(const Particles& p, const std::vector<Ve
     double s = 0.0;
     cells.for_each_within(at, reach, [&](std::uint32_t b) {
       const double r = (at - x[b]).norm();
-      if (r < Kernel::support * p.h[b]) s += p.m[b] * kernel::W<Kernel, 2>(r, p.h[b]);
+      const double h = with_images.h[b];
+      if (r < Kernel::support * h) s += with_images.m[b] * kernel::W<Kernel, 2>(r, h);
     });
     sigma[static_cast<std::size_t>(i)] = s;
   }
