@@ -25,7 +25,9 @@ int main(int argc, char** argv) {
         "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(1.2), "h / Delta (SPH: eta)")(
         "reg-steps", ex::po::value(&s.reg_steps)->default_value(48), "RSPH: steps between regularizations")(
         "t-end", ex::po::value(&s.t_end)->default_value(0.0), "end time (0: tau_KH = 0.58)")(
-        "courant", ex::po::value(&s.courant)->default_value(0.3), "Courant factor");
+        "courant", ex::po::value(&s.courant)->default_value(0.3), "Courant factor")(
+        "wavelengths", ex::po::value(&s.wavelengths)->default_value(6),
+        "box width in wavelengths of the seeded mode (6: the paper's box; 1: one wavelength, periodic)");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-kelvin-helmholtz: Kelvin-Helmholtz instability at density ratio 10.\n"
@@ -57,12 +59,13 @@ int main(int argc, char** argv) {
     csv.close();
     io::Json summary;
     summary.set("test", "kelvin_helmholtz").set("method", method).set("alpha_u", s.alpha_u).set("cells", s.cells);
-    summary.set("h_over_dx", s.h_over_dx).set("courant", s.courant);
+    summary.set("h_over_dx", s.h_over_dx).set("courant", s.courant).set("wavelengths", s.wavelengths);
     if (method == "rsph") summary.set("reg_steps", s.reg_steps);
     summary.set("particles", r.particles).set("tau_KH", s.tau_KH()).set("time", r.t.back());
     summary.set("amplitude_seed", r.seed).set("amplitude_final", r.amplitude_final);
     summary.set("amplification", r.amplitude_final / r.seed).set("growth_rate", r.growth_rate);
     summary.set("growth_rate_incompressible", 2.0 * std::numbers::pi / s.tau_KH());
+    summary.set("overturned_fraction", r.folds.overturned_fraction).set("interface_crossings", r.folds.mean_crossings);
     summary.set("energy_error", r.energy_error).set("wall_seconds", r.wall_seconds).set("steps", r.steps);
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
     summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
@@ -70,9 +73,10 @@ int main(int argc, char** argv) {
     fmt::print(
         "rsph-kelvin-helmholtz {} alpha_u = {}: {} particles, {} steps, {:.1f} s; amplitude {:.4f} -> {:.4f} "
         "(x{:.1f}), "
-        "growth rate {:.2f} (linear theory {:.2f}); energy error {:.1e}\n",
+        "growth rate {:.2f} (linear theory {:.2f}); interface overturned over {:.0f} % of the width; energy error "
+        "{:.1e}\n",
         method, s.alpha_u, r.particles, r.steps, r.wall_seconds, r.seed, r.amplitude_final, r.amplitude_final / r.seed,
-        r.growth_rate, 2.0 * std::numbers::pi / s.tau_KH(), r.energy_error);
+        r.growth_rate, 2.0 * std::numbers::pi / s.tau_KH(), 100.0 * r.folds.overturned_fraction, r.energy_error);
     return 0;
   });
 }

@@ -2,7 +2,8 @@
 // §3.3 of the paper: Kelvin-Helmholtz instability at density ratio 10 (Agertz et al. 2007 setup):
 // (-0.5, 0.5) x (0, 0.5), periodic in x, reflecting walls at y = 0 and 0.5; rho = 10 above y = 0.25 and
 // 1 below; P = 2.5; gamma = 5/3; v_x = 0.5 below, -0.5 above; v_y = A sin(-k (x + 0.5)) within 0.025 of
-// the interface, A = 0.025, k = 12 pi; no artificial viscosity.
+// the interface, A = 0.025, k = 12 pi; no artificial viscosity. The box holds six wavelengths of the seeded
+// mode; `wavelengths` narrows it (periodic, so one wavelength evolves the seeded mode alike at a sixth of the cost).
 #include "rsph/rsph.hpp"
 
 #include <chrono>
@@ -23,10 +24,18 @@ struct KelvinHelmholtzParams {
   double A = 0.025, k = 12.0 * std::numbers::pi, layer = 0.025;
   double t_end = 0.0;  ///< 0: tau_KH
   double courant = 0.3;
+  int wavelengths = 6;  ///< box width in wavelengths 2 pi / k of the seeded mode (6: the paper's -0.5 < x < 0.5)
 
+  /// Lattice columns across the box: the box is columns() * Delta wide.
+  int columns() const { return static_cast<int>(std::lround(cells * wavelengths * 2.0 * std::numbers::pi / k)); }
   void validate() const {
     require(cells >= 16 && cells % 2 == 0,
             "Kelvin-Helmholtz: need an even number of cells >= 16 (got " + std::to_string(cells) + ")");
+    require(wavelengths >= 1 && wavelengths <= 6,
+            "Kelvin-Helmholtz: the box holds 1 to 6 wavelengths (got " + std::to_string(wavelengths) + ")");
+    require(std::abs(cells * wavelengths * 2.0 * std::numbers::pi / k - columns()) < 1e-6,
+            "Kelvin-Helmholtz: " + std::to_string(wavelengths) + " wavelengths of 1/6 must span a whole number of " +
+                "lattice spacings 1/" + std::to_string(cells) + " (take --cells a multiple of 6)");
     require(h_over_dx > 0.0, "Kelvin-Helmholtz: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
     require(chi >= 1.0, "Kelvin-Helmholtz: the density ratio must be >= 1");
     require(reg_steps >= 1, "Kelvin-Helmholtz: regularize at least every step");
@@ -38,7 +47,7 @@ struct KelvinHelmholtzParams {
   Box<2> box() const {
     Box<2> b;
     b.lo = Vec<2>(-0.5, 0.0);
-    b.hi = Vec<2>(0.5, 0.5);
+    b.hi = Vec<2>(-0.5 + static_cast<double>(columns()) / cells, 0.5);
     b.edge = {Edge::periodic, Edge::reflecting};
     return b;
   }
@@ -71,7 +80,7 @@ inline ParticleSet<2, true> kh_lattice(const KelvinHelmholtzParams& s, double h_
   const double bias = kernel::lattice_sum<kernel::CubicSpline, 2>(h_over_dx);
   ParticleSet<2, true> p;
   for (int j = 0; j < s.cells / 2; ++j)
-    for (int i = 0; i < s.cells; ++i) {
+    for (int i = 0; i < s.columns(); ++i) {
       const Vec<2> x(-0.5 + (i + 0.5) * dx, (j + 0.5) * dx);
       const double rho = x[1] > 0.25 ? s.chi : 1.0;
       p.add(rho * dx * dx / bias, x, s.velocity(x), h_over_dx * dx, gas.internal_energy(rho, s.P));
@@ -83,9 +92,10 @@ inline ParticleSet<2, true> kh_lattice(const KelvinHelmholtzParams& s, double h_
 inline ParticleSet<2, true> kh_equal_mass(const KelvinHelmholtzParams& s) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
+  const double width = s.box().size()[0];
   ParticleSet<2, true> p;
   auto block = [&](double rho, double y0, double y1, int nx) {
-    const double dx = 1.0 / nx;
+    const double dx = width / nx;
     const int ny = std::max(1, static_cast<int>(std::lround((y1 - y0) / dx)));
     const double dy = (y1 - y0) / ny;
     const double bias = kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
@@ -95,15 +105,22 @@ inline ParticleSet<2, true> kh_equal_mass(const KelvinHelmholtzParams& s) {
         p.add(rho * dx * dy / bias, x, s.velocity(x), s.h_over_dx * std::sqrt(dx * dy), gas.internal_energy(rho, s.P));
       }
   };
-  block(1.0, 0.0, 0.25, s.cells);
-  block(s.chi, 0.25, 0.5, static_cast<int>(std::lround(s.cells * std::sqrt(s.chi))));
+  block(1.0, 0.0, 0.25, s.columns());
+  block(s.chi, 0.25, 0.5, static_cast<int>(std::lround(s.columns() * std::sqrt(s.chi))));
   return p;
+}
+
+/// The interface rho = sqrt(chi) (between the phases' densities on a log scale), sampled at Delta / 4.
+template <class P>
+analysis::InterfaceFolds interface_folds(const P& p, const KelvinHelmholtzParams& s) {
+  return analysis::interface_folds<kernel::CubicSpline>(p, s.box(), std::sqrt(s.chi), 0.25 / s.cells);
 }
 
 struct KhRun {
   std::vector<double> t, amplitude;
   double seed = 0.0, amplitude_final = 0.0, growth_rate = 0.0;
   double energy_error = 0.0, wall_seconds = 0.0, regularization_seconds = 0.0;
+  analysis::InterfaceFolds folds;  ///< at the end: how far the interface has rolled up
   std::uint64_t steps = 0, updates = 0, regularizations = 0, particles = 0;
 };
 
@@ -134,6 +151,7 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
   r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   on_end(sim);
   r.amplitude_final = r.amplitude.back();
+  r.folds = interface_folds(sim.particles(), s);
   r.growth_rate = fitted_growth_rate(r.t, r.amplitude, 0.1 * s.tau_KH(), 0.5 * s.tau_KH());
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
   r.steps = sim.steps();
