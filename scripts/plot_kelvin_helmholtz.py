@@ -33,10 +33,14 @@ def main():
             t = h.attrs["time"]
         size = 60000.0 / len(rho)
         sc = ax.scatter(x[:, 0], x[:, 1], c=rho, s=size, cmap="viridis", vmin=1, vmax=10, linewidths=0)
-        ax.set_xlim(-0.5, 0.5)
+        ax.set_xlim(-0.5, -0.5 + s.get("wavelengths", 6) / 6)  # the box holds `wavelengths` of 1/6
         ax.set_ylim(0, 0.5)
         ax.set_aspect("equal")
-        ax.set_title(f"{label}: t = {t:.2f}, {s['particles']} particles, {s['wall_seconds']:.0f} s", fontsize=9)
+        narrow = s.get("wavelengths", 6) < 6  # a narrow box: the title in lines
+        title = f"{label}:{chr(10) if narrow else ' '}t = {t:.2f}, {s['particles']} particles, {s['wall_seconds']:.0f} s"
+        if "overturned_fraction" in s:
+            title += f",{chr(10) if narrow else ' '}{100 * s['overturned_fraction']:.0f} % overturned"
+        ax.set_title(title, fontsize=9)
         fig.colorbar(sc, ax=ax, fraction=0.025)
         amp = read_csv(os.path.join(d, "amplitude.csv"))
         amp_ax.plot(amp["time"], amp["amplitude"], label=label)

@@ -26,6 +26,9 @@ int main(int argc, char** argv) {
         "reg-steps", ex::po::value(&s.reg_steps)->default_value(48), "RSPH: steps between regularizations")(
         "t-end", ex::po::value(&s.t_end)->default_value(0.0), "end time (0: tau_KH = 0.58)")(
         "courant", ex::po::value(&s.courant)->default_value(0.3), "Courant factor")(
+        "density-ratio", ex::po::value(&s.chi)->default_value(10.0), "density ratio chi of the upper to the lower gas")(
+        "seed-amplitude", ex::po::value(&s.A)->default_value(0.025),
+        "A of the seeded v_y (0: an unseeded shear layer)")(
         "wavelengths", ex::po::value(&s.wavelengths)->default_value(6),
         "box width in wavelengths of the seeded mode (6: the paper's box; 1: one wavelength, periodic)");
     ex::po::variables_map vm;
@@ -57,26 +60,37 @@ int main(int argc, char** argv) {
     io::CsvWriter csv(dir / "amplitude.csv", {"time", "amplitude"});
     for (std::size_t i = 0; i < r.t.size(); ++i) csv.row({r.t[i], r.amplitude[i]});
     csv.close();
+    io::CsvWriter layer(dir / "shear_layer.csv", {"time", "momentum_thickness"});
+    for (std::size_t i = 0; i < r.t.size(); ++i) layer.row({r.t[i], r.thickness[i]});
+    layer.close();
     io::Json summary;
     summary.set("test", "kelvin_helmholtz").set("method", method).set("alpha_u", s.alpha_u).set("cells", s.cells);
     summary.set("h_over_dx", s.h_over_dx).set("courant", s.courant).set("wavelengths", s.wavelengths);
+    summary.set("density_ratio", s.chi).set("seed_amplitude", s.A);
     if (method == "rsph") summary.set("reg_steps", s.reg_steps);
     summary.set("particles", r.particles).set("tau_KH", s.tau_KH()).set("time", r.t.back());
     summary.set("amplitude_seed", r.seed).set("amplitude_final", r.amplitude_final);
     summary.set("amplification", r.amplitude_final / r.seed).set("growth_rate", r.growth_rate);
     summary.set("growth_rate_incompressible", 2.0 * std::numbers::pi / s.tau_KH());
-    summary.set("overturned_fraction", r.folds.overturned_fraction).set("interface_crossings", r.folds.mean_crossings);
+    summary.set("momentum_thickness_final", r.thickness.back());
+    if (r.folds)
+      summary.set("overturned_fraction", r.folds->overturned_fraction)
+          .set("interface_crossings", r.folds->mean_crossings);
     summary.set("energy_error", r.energy_error).set("wall_seconds", r.wall_seconds).set("steps", r.steps);
     summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
     summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
     summary.write(dir / "summary.json");
-    fmt::print(
-        "rsph-kelvin-helmholtz {} alpha_u = {}: {} particles, {} steps, {:.1f} s; amplitude {:.4f} -> {:.4f} "
-        "(x{:.1f}), "
-        "growth rate {:.2f} (linear theory {:.2f}); interface overturned over {:.0f} % of the width; energy error "
-        "{:.1e}\n",
-        method, s.alpha_u, r.particles, r.steps, r.wall_seconds, r.seed, r.amplitude_final, r.amplitude_final / r.seed,
-        r.growth_rate, 2.0 * std::numbers::pi / s.tau_KH(), 100.0 * r.folds.overturned_fraction, r.energy_error);
+    std::string line = fmt::format(
+        "rsph-kelvin-helmholtz {} alpha_u = {}: {} particles, {} steps, {:.1f} s; amplitude "
+        "{:.4f} -> {:.4f}",
+        method, s.alpha_u, r.particles, r.steps, r.wall_seconds, r.seed, r.amplitude_final);
+    if (r.seed > 0.0) line += fmt::format(" (x{:.1f})", r.amplitude_final / r.seed);
+    line +=
+        fmt::format(", growth rate {:.2f} (linear theory {:.2f})", r.growth_rate, 2.0 * std::numbers::pi / s.tau_KH());
+    if (r.folds)
+      line += fmt::format("; interface overturned over {:.0f} % of the width", 100.0 * r.folds->overturned_fraction);
+    fmt::print("{}; shear-layer momentum thickness {:.2e}; energy error {:.1e}\n", line, r.thickness.back(),
+               r.energy_error);
     return 0;
   });
 }

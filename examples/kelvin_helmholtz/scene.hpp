@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,6 +41,7 @@ struct KelvinHelmholtzParams {
     require(chi >= 1.0, "Kelvin-Helmholtz: the density ratio must be >= 1");
     require(reg_steps >= 1, "Kelvin-Helmholtz: regularize at least every step");
     require(alpha_u >= 0.0, "Kelvin-Helmholtz: alpha_u must be non-negative");
+    require(A >= 0.0, "Kelvin-Helmholtz: the seed amplitude must be non-negative");
   }
   /// 2 pi over the incompressible growth rate k dv sqrt(chi) / (1 + chi): 0.58 for the paper's setup.
   double tau_KH() const { return 2.0 * std::numbers::pi / (k * dv * std::sqrt(chi) / (1.0 + chi)); }
@@ -70,6 +72,27 @@ double mode_amplitude(const P& p, double k) {
     d += w;
   }
   return 2.0 * std::sqrt((s / d) * (s / d) + (c / d) * (c / d));
+}
+
+/// Momentum thickness of the shear layer, theta = integral of (1/4 - (<v_x> / dv)^2) dy with <v_x> the
+/// volume-weighted mean over rows Delta high: 0 for the sharp initial layer, delta / 2 for a layer
+/// (dv / 2) tanh(y / delta). What the flow's own mixing and the method's dissipation have widened it to.
+template <class P>
+double momentum_thickness(const P& p, const KelvinHelmholtzParams& s) {
+  const Box<2> box = s.box();
+  const auto rows = static_cast<std::size_t>(s.cells / 2);
+  const double dy = box.size()[1] / static_cast<double>(rows);
+  std::vector<double> V(rows, 0.0), Vv(rows, 0.0);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const auto row = std::min(rows - 1, static_cast<std::size_t>(std::max(0.0, (p.x[a][1] - box.lo[1]) / dy)));
+    const double vol = p.m[a] / p.rho[a];
+    V[row] += vol;
+    Vv[row] += vol * p.v[a][0];
+  }
+  double theta = 0.0;
+  for (std::size_t j = 0; j < rows; ++j)
+    if (V[j] > 0.0) theta += (0.25 - std::pow(Vv[j] / (V[j] * s.dv), 2)) * dy;
+  return theta;
 }
 
 /// RSPH: a square lattice; masses give rho through the lattice sum.
@@ -117,10 +140,11 @@ analysis::InterfaceFolds interface_folds(const P& p, const KelvinHelmholtzParams
 }
 
 struct KhRun {
-  std::vector<double> t, amplitude;
+  std::vector<double> t, amplitude, thickness;  ///< per step: time, mode amplitude, momentum thickness
   double seed = 0.0, amplitude_final = 0.0, growth_rate = 0.0;
   double energy_error = 0.0, wall_seconds = 0.0, regularization_seconds = 0.0;
-  analysis::InterfaceFolds folds;  ///< at the end: how far the interface has rolled up
+  /// At the end: how far the interface has rolled up (with two phases, chi > 1).
+  std::optional<analysis::InterfaceFolds> folds;
   std::uint64_t steps = 0, updates = 0, regularizations = 0, particles = 0;
 };
 
@@ -143,15 +167,17 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
   r.seed = mode_amplitude(sim.particles(), s.k);
   r.t.push_back(0.0);
   r.amplitude.push_back(r.seed);
+  r.thickness.push_back(momentum_thickness(sim.particles(), s));
   sim.run_until(s.end_time(), [&](const auto& sm) {
     r.t.push_back(sm.time());
     r.amplitude.push_back(mode_amplitude(sm.particles(), s.k));
+    r.thickness.push_back(momentum_thickness(sm.particles(), s));
     on_step(sm);
   });
   r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   on_end(sim);
   r.amplitude_final = r.amplitude.back();
-  r.folds = interface_folds(sim.particles(), s);
+  if (s.chi > 1.0) r.folds = interface_folds(sim.particles(), s);
   r.growth_rate = fitted_growth_rate(r.t, r.amplitude, 0.1 * s.tau_KH(), 0.5 * s.tau_KH());
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
   r.steps = sim.steps();
