@@ -294,7 +294,7 @@ inline double area_within_sides(const ConvexPolygon& p, const Sides& sides, cons
 /// without a copy for the sides no vertex of p lies beyond.
 inline double intersection_area(const ConvexPolygon& p, const ConvexPolygon& window) {
   if (window.n > Sides::capacity) return area(clip_convex(p, window));
-  const std::uint32_t all = window.n == 32 ? ~std::uint32_t{0} : (std::uint32_t{1} << window.n) - 1;
+  const std::uint32_t all = window.n == Sides::capacity ? ~std::uint32_t{0} : (std::uint32_t{1} << window.n) - 1;
   return area_within_sides(p, sides_of(window), Point::Zero(), all);
 }
 
