@@ -4,6 +4,7 @@
 #include "rsph/analysis/disk.hpp"
 #include "rsph/analysis/fit.hpp"
 #include "rsph/analysis/interface.hpp"
+#include "rsph/analysis/interpolate.hpp"
 #include "rsph/analysis/riemann.hpp"
 #include "rsph/analysis/shock_tube.hpp"
 #include "rsph/analysis/viscous_ring.hpp"

@@ -4,7 +4,7 @@
 // whose crests stay single-valued and a billow that curls over can carry the same amplitude. Along a
 // vertical line, a single-valued interface is crossed once; where a billow has curled over, three times
 // or more.
-#include "rsph/analysis/disk.hpp"
+#include "rsph/analysis/interpolate.hpp"
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 
