@@ -147,6 +147,19 @@ inline Bounds bounds(const ConvexPolygon& p) {
   return b;
 }
 
+/// Bounds and shoelace area in one pass over the vertices.
+inline Bounds bounds_and_area(const ConvexPolygon& p, double& a) {
+  Bounds b{p[0], p[0]};
+  a = 0.0;
+  for (int i = 0, j = p.n - 1; i < p.n; j = i++) {
+    b.lo = b.lo.cwiseMin(p[i]);
+    b.hi = b.hi.cwiseMax(p[i]);
+    a += p[j].x() * p[i].y() - p[i].x() * p[j].y();
+  }
+  a *= 0.5;
+  return b;
+}
+
 /// Area of p inside the rectangle [x0, x1] x [y0, y1]; `pb` are p's bounds and `p_area` its area,
 /// so that sides which cannot cut are skipped.
 inline double clipped_area_rect(const ConvexPolygon& p, const Bounds& pb, double p_area, double x0, double y0,
@@ -197,9 +210,9 @@ inline double mean_clamped_height(double y0, double y1, double inv_span, double 
 /// clamp(y - ys[j], 0, ys[j+1] - ys[j]) dx) along p's boundary inside column i, so one pass over the
 /// edges, each split at the column lines, gives every overlap at once (instead of clipping p against each
 /// cell). Cells p only touches get zero or round-off crumbs of either sign; the areas sum to area(p).
-inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, const double* ys, int n_j,
-                          std::vector<double>& area) {
-  area.assign(static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j), 0.0);
+/// `area` holds n_i * n_j values and is overwritten.
+inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, const double* ys, int n_j, double* area) {
+  std::fill_n(area, static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j), 0.0);
   for (int e = 0, prev = p.n - 1; e < p.n; prev = e++) {
     const Point& P = p[prev];
     const Point& Q = p[e];
@@ -218,7 +231,7 @@ inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, con
       const double weight = sign * (xb - xa);
       const double y_min = std::min(ya, yb), y_max = std::max(ya, yb);
       const double inv_span = y_max > y_min ? 1.0 / (y_max - y_min) : 0.0;
-      double* column = area.data() + static_cast<std::size_t>(c) * static_cast<std::size_t>(n_j);
+      double* column = area + static_cast<std::size_t>(c) * static_cast<std::size_t>(n_j);
       int j = 0;
       for (; j < n_j && ys[j + 1] <= y_min; ++j) column[j] += weight * (ys[j + 1] - ys[j]);  // rows wholly below
       for (; j < n_j && ys[j] < y_max; ++j)
@@ -228,6 +241,13 @@ inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, con
       ya = yb;
     }
   }
+}
+
+/// grid_overlaps into a vector, sized n_i * n_j.
+inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, const double* ys, int n_j,
+                          std::vector<double>& area) {
+  area.resize(static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j));
+  grid_overlaps(p, xs, n_i, ys, n_j, area.data());
 }
 
 /// p intersected with a convex polygon `window` (counter-clockwise).
