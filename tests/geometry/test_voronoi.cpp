@@ -75,6 +75,41 @@ TEST_CASE("Voronoi cells tile a periodic box and match the brute-force oracle", 
   }
 }
 
+TEST_CASE("the dual hull settles almost every cell and leaves walls and near-coincident sites to the clips",
+          "[voronoi]") {
+  // Each set's cells against the brute-force oracle, and how many took their first cut from the dual hull.
+  struct Case {
+    const char* name;
+    std::vector<Point> x;
+    Box<2> box;
+    double min_share, max_share;  // of cells from the hull
+  };
+  auto paired = jittered(16, 0.3, 9);
+  for (std::size_t a = 0; a + 1 < paired.size(); a += 5) paired[a + 1] = paired[a] + Point(1e-9, 0.4e-9);
+  const std::vector<Case> cases = {
+      {"jittered, periodic", jittered(16, 0.3, 8), box_with(Edge::periodic, Edge::periodic), 0.99, 1.0},
+      {"regular lattice (co-circular sites)", jittered(16, 0.0, 8), box_with(Edge::periodic, Edge::periodic), 1.0, 1.0},
+      // cells at the walls are clipped to the box: 60 of the 256 touch a wall
+      {"jittered, walls", jittered(16, 0.3, 8), box_with(Edge::reflecting, Edge::reflecting), 0.7, 0.78},
+      // a pair 1e-9 apart bounds each other's cells by nearly parallel sides, and so do their neighbours' cells
+      {"near-coincident pairs", paired, box_with(Edge::periodic, Edge::periodic), 0.3, 0.9},
+  };
+  for (const auto& c : cases) {
+    INFO(c.name);
+    LocalVoronoi builder;
+    const auto local = cell_areas(builder, c.x, c.box);
+    const auto oracle = brute_force_areas(c.x, c.box);
+    double worst = 0.0;
+    for (std::size_t a = 0; a < c.x.size(); ++a) worst = std::max(worst, std::abs(local[a] - oracle[a]) / oracle[a]);
+    CHECK(worst < 1e-11);
+    CHECK(sum(local) == Approx(1.0).epsilon(1e-12));
+    const double share = static_cast<double>(builder.cells_from_hull()) / static_cast<double>(c.x.size());
+    INFO("share from the hull " << share);
+    CHECK(share >= c.min_share);
+    CHECK(share <= c.max_share);
+  }
+}
+
 TEST_CASE("the local and Boost.Polygon builders agree on every cell", "[voronoi]") {
   struct Case {
     const char* name;
