@@ -147,19 +147,6 @@ inline Bounds bounds(const ConvexPolygon& p) {
   return b;
 }
 
-/// Bounds and shoelace area in one pass over the vertices.
-inline Bounds bounds_and_area(const ConvexPolygon& p, double& a) {
-  Bounds b{p[0], p[0]};
-  a = 0.0;
-  for (int i = 0, j = p.n - 1; i < p.n; j = i++) {
-    b.lo = b.lo.cwiseMin(p[i]);
-    b.hi = b.hi.cwiseMax(p[i]);
-    a += p[j].x() * p[i].y() - p[i].x() * p[j].y();
-  }
-  a *= 0.5;
-  return b;
-}
-
 /// Area of p inside the rectangle [x0, x1] x [y0, y1]; `pb` are p's bounds and `p_area` its area,
 /// so that sides which cannot cut are skipped.
 inline double clipped_area_rect(const ConvexPolygon& p, const Bounds& pb, double p_area, double x0, double y0,
