@@ -15,6 +15,7 @@
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/core/particle_set.hpp"
+#include "rsph/core/scratch.hpp"
 #include "rsph/eos/concept.hpp"
 #include "rsph/eos/ideal_gas.hpp"
 #include "rsph/eos/isothermal.hpp"

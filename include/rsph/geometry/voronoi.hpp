@@ -22,6 +22,7 @@
 //    the two agree to round-off on any set whose points are farther apart than the quantum.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
+#include "rsph/core/scratch.hpp"
 #include "rsph/geometry/polygon.hpp"
 #include "rsph/neighbors/cell_list.hpp"
 
@@ -441,7 +442,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
     }
     std::size_t n_found = 0;
     cells.for_each_run_in_box(xa + lo, xa + hi, [&](const std::uint32_t* index, const Point* at, std::size_t count) {
-      if (found.size() < n_found + count) found.resize(2 * (n_found + count));
+      grown(found, n_found + count);
       for (std::size_t s = 0; s < count; ++s) {
         const Point d = at[s] - xa;
         const double d2 = d.squaredNorm();
@@ -488,7 +489,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
           const double outer2 = radius * radius;
           n_found = 0;
           cells.for_each_run_within(xa, radius, [&](const std::uint32_t* index, const Point* at, std::size_t count) {
-            if (found.size() < n_found + count) found.resize(2 * (n_found + count));
+            grown(found, n_found + count);
             // Each point is written and kept by advancing the count, without a branch: in or out is a coin
             // toss no predictor learns.
             for (std::size_t s = 0; s < count; ++s) {

@@ -4,6 +4,7 @@
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/core/particle_set.hpp"
+#include "rsph/core/scratch.hpp"
 #include "rsph/geometry/polygon.hpp"
 #include "rsph/geometry/voronoi.hpp"
 #include "rsph/regularize/lattice.hpp"
@@ -123,13 +124,6 @@ inline std::int64_t wrap_index(std::int64_t i, std::int64_t period) {
   if (i < 0 && i >= -period) return i + period;
   i %= period;
   return i < 0 ? i + period : i;
-}
-
-/// The storage of `v`, grown to at least n elements (never shrunk: per-cell scratch keeps its size).
-template <class T>
-T* grown(std::vector<T>& v, std::size_t n) {
-  if (v.size() < n) v.resize(2 * n);
-  return v.data();
 }
 
 /// The dense block of candidate new cells a remap accumulates into: an index range per axis, wrapped
