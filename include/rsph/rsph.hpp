@@ -14,6 +14,7 @@
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/core/scratch.hpp"
 #include "rsph/eos/concept.hpp"

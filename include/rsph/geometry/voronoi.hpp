@@ -22,6 +22,7 @@
 //    the two agree to round-off on any set whose points are farther apart than the quantum.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/core/scratch.hpp"
 #include "rsph/geometry/polygon.hpp"
 #include "rsph/neighbors/cell_list.hpp"
@@ -34,16 +35,12 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
-#include <exception>
 #include <limits>
 #include <numbers>
 #include <span>
 #include <string>
 #include <unordered_map>
 #include <vector>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 namespace rsph::geometry {
 
@@ -200,36 +197,6 @@ inline bool finish_cell(ConvexPolygon*& cell, ConvexPolygon*& scratch, std::size
   return !needs_more_images(*cell, xa, box, margin);
 }
 
-/// Runs body(thread, begin, end) over contiguous chunks of [0, n), one per thread. An exception
-/// thrown in a chunk is carried out of the parallel region and rethrown (the first one wins).
-template <class Body>
-void run_parallel(std::size_t n, Body&& body) {
-  int n_threads = 1;
-#ifdef _OPENMP
-  n_threads = omp_get_max_threads();
-#endif
-  std::exception_ptr error;
-#pragma omp parallel num_threads(n_threads)
-  {
-    int t = 0;
-#ifdef _OPENMP
-    t = omp_get_thread_num();
-#endif
-    const std::size_t begin = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(n_threads);
-    const std::size_t end = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(n_threads);
-    try {
-      body(t, begin, end);
-    } catch (...) {
-#pragma omp critical(rsph_parallel_error)
-      if (!error) error = std::current_exception();
-    }
-  }
-  if (error) std::rethrow_exception(error);
-}
-
-}  // namespace detail
-
-namespace detail {
 /// Runs try_build(margin) with periodic images over a margin of 4 mean spacings, doubling it (and
 /// calling visit.restart()) until every cell's security disc is covered.
 template <class Visitor, class TryBuild>
@@ -272,13 +239,7 @@ inline std::size_t chosen(std::span<const std::uint32_t> only, std::size_t k) {
 }  // namespace detail
 
 /// Number of threads the builders use (visitors keep per-thread state).
-inline int builder_threads() {
-#ifdef _OPENMP
-  return omp_get_max_threads();
-#else
-  return 1;
-#endif
-}
+inline int builder_threads() { return max_threads(); }
 
 /// Local half-plane builder. visit(thread, a, cell) receives each chosen particle's cell in coordinates
 /// relative to x[a]; particles of one thread arrive in increasing order. When periodic images turn out
@@ -466,7 +427,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
     cells.build(sites.x, spacing);
     std::atomic<bool> ok{true};
     std::atomic<std::size_t> from_hull{0};
-    detail::run_parallel(detail::chosen_count(sites.n_real, only), [&](int thread, std::size_t begin, std::size_t end) {
+    rsph::run_parallel(detail::chosen_count(sites.n_real, only), [&](int thread, std::size_t begin, std::size_t end) {
       ConvexPolygon buffers[2];
       // Candidate buffers keep their size; n_found counts what the current disc wrote.
       std::vector<Candidate> found, extra;
@@ -585,7 +546,7 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
       } while (e != c.incident_edge());
     }
     std::atomic<bool> ok{true};
-    detail::run_parallel(detail::chosen_count(sites.n_real, only), [&](int thread, std::size_t begin, std::size_t end) {
+    rsph::run_parallel(detail::chosen_count(sites.n_real, only), [&](int thread, std::size_t begin, std::size_t end) {
       ConvexPolygon buffers[2];
       for (std::size_t k = begin; k < end && ok.load(std::memory_order_relaxed); ++k) {
         const std::size_t a = detail::chosen(only, k);

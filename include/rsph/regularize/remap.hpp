@@ -3,6 +3,7 @@
 // overlaps Omega_n^o of old Voronoi cells and new lattice cells.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/core/scratch.hpp"
 #include "rsph/geometry/polygon.hpp"
@@ -90,16 +91,36 @@ struct alignas(64) Sums {          // one per thread: aligned so that no two thr
       fill[n] += omega;
     }
   }
-  void merge(const Sums& o) {
-    for (std::size_t i = 0; i < m.size(); ++i) {
+  /// Adds o's sums of the cells [begin, end); the mismatch is merged by the caller.
+  void merge(const Sums& o, std::size_t begin, std::size_t end) {
+    for (std::size_t i = begin; i < end; ++i) {
       m[i] += o.m[i];
       E[i] += o.E[i];
       fill[i] += o.fill[i];
       mv[i] += o.mv[i];
     }
-    max_mismatch = std::max(max_mismatch, o.max_mismatch);
   }
 };
+
+/// Zeroes the per-thread sums, each thread its own, and, once they are filled, reduces them into the first,
+/// split by cells: each cell still adds the threads' sums in thread order, so the result is the serial
+/// reduction's to the bit. On two threads the serial passes over the grid had cost a tenth of the remap.
+template <int D>
+void clear_sums(std::vector<Sums<D>>& sums, std::size_t n_cells) {
+  sums.resize(static_cast<std::size_t>(max_threads()));
+  rsph::run_parallel(sums.size(), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) sums[t].resize(n_cells);
+  });
+}
+template <int D>
+void reduce_sums(std::vector<Sums<D>>& sums) {
+  if (sums.size() < 2) return;
+  rsph::run_parallel(sums[0].m.size(), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t t = 1; t < sums.size(); ++t) sums[0].merge(sums[t], begin, end);
+  });
+  for (std::size_t t = 1; t < sums.size(); ++t)
+    sums[0].max_mismatch = std::max(sums[0].max_mismatch, sums[t].max_mismatch);
+}
 
 }  // namespace detail
 
@@ -147,13 +168,16 @@ struct CellGrid {
     }
     return f;
   }
+  /// One integer division per axis but the last (f lies in the grid): the new set asks this of every cell.
   std::array<std::int64_t, D> unflat(std::size_t f) const {
     std::array<std::int64_t, D> idx;
-    for (int k = 0; k < D; ++k) {
+    for (int k = 0; k + 1 < D; ++k) {
       const auto kk = static_cast<std::size_t>(k);
-      idx[kk] = range.lo[kk] + static_cast<std::int64_t>(f % static_cast<std::size_t>(count[kk]));
-      f /= static_cast<std::size_t>(count[kk]);
+      const std::size_t rest = f / static_cast<std::size_t>(count[kk]);
+      idx[kk] = range.lo[kk] + static_cast<std::int64_t>(f - rest * static_cast<std::size_t>(count[kk]));
+      f = rest;
     }
+    idx[D - 1] = range.lo[D - 1] + static_cast<std::int64_t>(f);
     return idx;
   }
 };
@@ -473,10 +497,8 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
   static_assert(check_closing_region<Region>());
   static_assert(D == 2 || !Region::clips, "closing regions are two-dimensional");
   const std::size_t n_old = p.n_real;
-  const int n_threads = geometry::builder_threads();
   auto& sums = workspace.sums;
-  sums.resize(static_cast<std::size_t>(n_threads));
-  for (auto& s : sums) s.resize(grid.n_cells);
+  clear_sums(sums, grid.n_cells);
   auto specific_energy = [&](std::size_t a) {
     if constexpr (E)
       return p.u[a];
@@ -521,8 +543,7 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
     for_each_old_cell(p, box, lattice, builder, grid, region, workspace, add);
   }
 
-  // Reduce the per-thread sums (fixed order: the result does not depend on scheduling).
-  for (std::size_t t = 1; t < sums.size(); ++t) sums[0].merge(sums[t]);
+  reduce_sums(sums);
   return sums[0];
 }
 
@@ -536,10 +557,13 @@ template <int D, class Volume, class ForEachNeighbour>
 void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume, ForEachNeighbour&& for_each_neighbour,
                           std::size_t& handed_on, std::vector<std::uint8_t>& keep) {
   const std::size_t n_cells = S.m.size();
-  keep.assign(n_cells, 0);
-  const double min_mass = params.min_mass_ratio * *std::max_element(S.m.begin(), S.m.end());
-  for (std::size_t c = 0; c < n_cells; ++c)
-    keep[c] = S.fill[c] > params.min_fill * volume(c) && S.m[c] > 0.0 && S.m[c] >= min_mass;
+  keep.resize(n_cells);
+  const double min_mass =
+      params.min_mass_ratio > 0.0 ? params.min_mass_ratio * *std::max_element(S.m.begin(), S.m.end()) : 0.0;
+  rsph::run_parallel(n_cells, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t c = begin; c < end; ++c)
+      keep[c] = S.fill[c] > params.min_fill * volume(c) && S.m[c] > 0.0 && S.m[c] >= min_mass;
+  });
   auto best_neighbour = [&](std::size_t c) {
     std::int64_t kept_best = -1, heavy_best = -1;
     double best_fill = 0.0, best_mass = S.m[c];
@@ -590,36 +614,58 @@ void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume
 template <int D, bool E, class Place>
 void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<std::uint8_t>& keep,
                     const std::vector<std::size_t>& cells, Place&& place, RemapStats& stats) {
-  double ke_before = 0.0, ke_after = 0.0;
+  double ke_before = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) ke_before += 0.5 * p.m[a] * p.v[a].squaredNorm();
   stats.n_before = p.n_real;
-  // The old particles are spent (their sums are in S): the new ones take over their storage.
-  p.resize_all(0);
+  auto emitted = [&](std::size_t c) { return keep[c] && S.m[c] > 0.0; };
+  // Written in parallel: each thread takes a contiguous run of `cells` and writes its particles from the
+  // count of those before its run on, so the order is that of `cells` whatever the thread count.
+  const auto n_threads = static_cast<std::size_t>(max_threads());
+  std::vector<std::size_t> first(n_threads + 1, 0);
+  std::vector<double> ke_after(n_threads, 0.0);
+  rsph::run_parallel(cells.size(), [&](int t, std::size_t begin, std::size_t end) {
+    std::size_t n = 0;
+    for (std::size_t k = begin; k < end; ++k) n += emitted(cells[k]);
+    first[static_cast<std::size_t>(t) + 1] = n;
+  });
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  // The old particles are spent (their sums are in S): the new ones take over their storage, every field
+  // written once below (clearing it first would write the whole set twice).
   p.ghost_source.clear();
-  p.n_real = 0;
-  std::size_t n_new = 0;
-  for (std::size_t c : cells) n_new += keep[c] && S.m[c] > 0.0;
-  // Sized once and written by index rather than appended field by field.
-  p.resize_all(n_new);
-  p.n_real = n_new;
-  std::size_t a = 0;
-  for (std::size_t c : cells) {
-    if (!keep[c] || !(S.m[c] > 0.0)) continue;
-    const double m_n = S.m[c];
-    const Vec<D> v_n = S.mv[c] / m_n;  // eq. (8)
-    const double ke = 0.5 * m_n * v_n.squaredNorm();
-    ke_after += ke;
-    const auto [site, h] = place(c);
-    p.m[a] = m_n;
-    p.x[a] = site;
-    p.v[a] = v_n;
-    p.h[a] = h;
-    if constexpr (E) p.u[a] = std::max(0.0, (S.E[c] - ke) / m_n);  // eq. (9) plus the converted kinetic energy
-    p.rho[a] = m_n / S.fill[c];  // the remapped density, for schemes that do not sum eq. (2)
-    ++a;
-  }
+  p.resize_all(first.back());
+  p.n_real = first.back();
+  rsph::run_parallel(cells.size(), [&](int t, std::size_t begin, std::size_t end) {
+    std::size_t a = first[static_cast<std::size_t>(t)];
+    double ke_sum = 0.0;
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t c = cells[k];
+      if (!emitted(c)) continue;
+      const double m_n = S.m[c];
+      const Vec<D> v_n = S.mv[c] / m_n;  // eq. (8)
+      const double ke = 0.5 * m_n * v_n.squaredNorm();
+      ke_sum += ke;
+      const auto [site, h] = place(c);
+      p.m[a] = m_n;
+      p.x[a] = site;
+      p.v[a] = v_n;
+      p.h[a] = h;
+      p.rho[a] = m_n / S.fill[c];  // the remapped density, for schemes that do not sum eq. (2)
+      if constexpr (E) p.u[a] = std::max(0.0, (S.E[c] - ke) / m_n);  // eq. (9) plus the converted kinetic energy
+      ++a;
+    }
+    ke_after[static_cast<std::size_t>(t)] = ke_sum;
+    // the fields a remap does not set, cleared as whole runs (faster than a store each in the loop)
+    const auto from = static_cast<std::ptrdiff_t>(first[static_cast<std::size_t>(t)]);
+    const auto to = static_cast<std::ptrdiff_t>(a);
+    std::fill(p.P.begin() + from, p.P.begin() + to, 0.0);
+    std::fill(p.cs.begin() + from, p.cs.begin() + to, 0.0);
+    std::fill(p.dv_dt.begin() + from, p.dv_dt.begin() + to, Vec<D>::Zero());
+    if constexpr (E) std::fill(p.du_dt.begin() + from, p.du_dt.begin() + to, 0.0);
+    std::fill(p.frozen.begin() + from, p.frozen.begin() + to, std::uint8_t{0});
+  });
   stats.n_after = p.n_real;
-  stats.kinetic_converted = ke_before - ke_after;
+  stats.kinetic_converted = ke_before;
+  for (double ke : ke_after) stats.kinetic_converted -= ke;
 }
 
 /// Calls f(g) for the up to 3^D - 1 cells of `grid` around cell c (wrapping periodic axes).

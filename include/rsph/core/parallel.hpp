@@ -1,0 +1,47 @@
+#pragma once
+// The one parallel pattern the library uses outside the pair loops: contiguous chunks, one per thread, so
+// that every result is put together in a fixed order (it depends on the thread count, never on scheduling).
+#include <cstddef>
+#include <exception>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace rsph {
+
+/// Number of threads a parallel pass uses (1 without OpenMP).
+inline int max_threads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+
+/// Runs body(thread, begin, end) over contiguous chunks of [0, n), one per thread of the team, thread t
+/// taking the t-th; thread < max_threads(). The chunks follow the team actually started (a call from inside
+/// a parallel region gets a team of one), so no part of [0, n) is ever left out. An exception thrown in a
+/// chunk is carried out of the parallel region and rethrown (the first one wins).
+template <class Body>
+void run_parallel(std::size_t n, Body&& body) {
+  std::exception_ptr error;
+#pragma omp parallel num_threads(max_threads())
+  {
+    int t = 0, team = 1;
+#ifdef _OPENMP
+    t = omp_get_thread_num();
+    team = omp_get_num_threads();
+#endif
+    const std::size_t begin = n * static_cast<std::size_t>(t) / static_cast<std::size_t>(team);
+    const std::size_t end = n * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(team);
+    try {
+      body(t, begin, end);
+    } catch (...) {
+#pragma omp critical(rsph_parallel_error)
+      if (!error) error = std::current_exception();
+    }
+  }
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace rsph
