@@ -37,6 +37,7 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
+#include <numeric>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -54,38 +55,82 @@ struct SitesWithImages {
 
 namespace detail {
 
+/// Throws for the first particle (lowest index) that is not finite or lies outside a closed axis.
 inline void check_sites(const std::vector<Point>& x, const Box<2>& box) {
-  for (std::size_t a = 0; a < x.size(); ++a) {
-    if (!x[a].allFinite())
-      throw InputError("Voronoi cells: particle " + std::to_string(a) + " has a non-finite position");
+  // 0: fine, 1: not finite, 2 + k: outside along axis k
+  auto problem = [&](std::size_t a) {
+    if (!x[a].allFinite()) return 1;
     for (int k = 0; k < 2; ++k)
-      if (box.edge[k] != Edge::open && (x[a][k] < box.lo[k] || x[a][k] > box.hi[k]))
-        throw InputError("Voronoi cells: particle " + std::to_string(a) + " lies outside the domain along axis " +
-                         std::to_string(k));
-  }
+      if (box.edge[k] != Edge::open && (x[a][k] < box.lo[k] || x[a][k] > box.hi[k])) return 2 + k;
+    return 0;
+  };
+  std::vector<std::size_t> first_bad(static_cast<std::size_t>(max_threads()), x.size());
+  run_parallel(x.size(), [&](int t, std::size_t begin, std::size_t end) {
+    for (std::size_t a = begin; a < end; ++a)
+      if (problem(a) != 0) {
+        first_bad[static_cast<std::size_t>(t)] = a;
+        return;
+      }
+  });
+  const std::size_t a = *std::min_element(first_bad.begin(), first_bad.end());
+  if (a == x.size()) return;
+  const int what = problem(a);
+  if (what == 1) throw InputError("Voronoi cells: particle " + std::to_string(a) + " has a non-finite position");
+  throw InputError("Voronoi cells: particle " + std::to_string(a) + " lies outside the domain along axis " +
+                   std::to_string(what - 2));
 }
 
-/// Fills `s` with the particles and their periodic images (reusing its storage from call to call).
+/// Fills `s` with the particles and their periodic images (reusing its storage from call to call). Both
+/// are written in parallel; the images come in the order of a serial pass (by particle, then by shift),
+/// each thread writing its particles' images from the count of those before them on.
 inline void add_periodic_images(const std::vector<Point>& x, const Box<2>& box, double margin, SitesWithImages& s) {
-  s.x.assign(x.begin(), x.end());
-  s.n_real = x.size();
+  const std::size_t n_real = x.size();
+  s.n_real = n_real;
   s.margin = margin;
-  s.source.resize(x.size());
-  for (std::size_t a = 0; a < x.size(); ++a) s.source[a] = static_cast<std::uint32_t>(a);
+  s.x.resize(n_real);
+  s.source.resize(n_real);
+  run_parallel(n_real, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t a = begin; a < end; ++a) {
+      s.x[a] = x[a];
+      s.source[a] = static_cast<std::uint32_t>(a);
+    }
+  });
+  const auto n_threads = static_cast<std::size_t>(max_threads());
+  std::vector<std::size_t> first(n_threads + 1);
   for (int k = 0; k < 2; ++k) {
     if (!box.periodic(k)) continue;
-    const double L = box.hi[k] - box.lo[k];
+    const double L = box.hi[k] - box.lo[k], lo = box.lo[k] - margin, hi = box.hi[k] + margin;
     const auto reach = static_cast<int>(std::ceil(margin / L));  // a wide margin needs several periods
+    // calls f(shifted point) for each image of point i that lies within the margin, shifts ascending
+    auto for_each_image = [&](std::size_t i, auto&& f) {
+      const double c = s.x[i][k];
+      if (c - L >= lo || c + L <= hi || reach > 1)  // almost every point has no image at all
+        for (int shift = -reach; shift <= reach; ++shift) {
+          const double shifted = c + shift * L;
+          if (shift == 0 || shifted < lo || shifted > hi) continue;
+          Point p = s.x[i];
+          p[k] = shifted;
+          f(p);
+        }
+    };
     const std::size_t n = s.x.size();
-    for (std::size_t i = 0; i < n; ++i)
-      for (int shift = -reach; shift <= reach; ++shift) {
-        if (shift == 0) continue;
-        Point p = s.x[i];
-        p[k] += shift * L;
-        if (p[k] < box.lo[k] - margin || p[k] > box.hi[k] + margin) continue;
-        s.x.push_back(p);
-        s.source.push_back(s.source[i]);
-      }
+    std::fill(first.begin(), first.end(), 0);
+    run_parallel(n, [&](int t, std::size_t begin, std::size_t end) {
+      std::size_t count = 0;
+      for (std::size_t i = begin; i < end; ++i) for_each_image(i, [&](const Point&) { ++count; });
+      first[static_cast<std::size_t>(t) + 1] = count;
+    });
+    std::partial_sum(first.begin(), first.end(), first.begin());
+    s.x.resize(n + first.back());
+    s.source.resize(n + first.back());
+    run_parallel(n, [&](int t, std::size_t begin, std::size_t end) {
+      std::size_t at = n + first[static_cast<std::size_t>(t)];
+      for (std::size_t i = begin; i < end; ++i)
+        for_each_image(i, [&](const Point& p) {
+          s.x[at] = p;
+          s.source[at++] = s.source[i];
+        });
+    });
   }
 }
 
