@@ -68,6 +68,29 @@ TEST_CASE("run_parallel carries an exception out of the parallel region", "[core
                   std::runtime_error);
 }
 
+TEST_CASE("run_parallel_packed writes what each chunk counted, in the order of a serial pass", "[core]") {
+  // the multiples of 3 below n, packed
+  for (std::size_t n : {std::size_t{0}, std::size_t{5}, std::size_t{1001}}) {
+    std::vector<std::size_t> out;
+    const std::size_t total = run_parallel_packed(
+        n,
+        [](std::size_t begin, std::size_t end) {
+          std::size_t k = 0;
+          for (std::size_t i = begin; i < end; ++i) k += i % 3 == 0;
+          return k;
+        },
+        [&](std::size_t size) { out.assign(size, n); },
+        [&](int, std::size_t begin, std::size_t end, std::size_t first) {
+          for (std::size_t i = begin; i < end; ++i)
+            if (i % 3 == 0) out[first++] = i;
+        });
+    INFO("n = " << n);
+    REQUIRE(total == (n + 2) / 3);
+    REQUIRE(out.size() == total);
+    for (std::size_t k = 0; k < total; ++k) CHECK(out[k] == 3 * k);
+  }
+}
+
 #ifdef _OPENMP
 TEST_CASE("a remap on two threads gives the new set of one thread", "[core][regularize]") {
   // The new set is written by both threads from their own first index on, and the per-thread sums are

@@ -3,6 +3,8 @@
 // that every result is put together in a fixed order (it depends on the thread count, never on scheduling).
 #include <cstddef>
 #include <exception>
+#include <numeric>
+#include <vector>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -42,6 +44,23 @@ void run_parallel(std::size_t n, Body&& body) {
     }
   }
   if (error) std::rethrow_exception(error);
+}
+
+/// A parallel pass whose chunks each write a number of items known only per chunk, packed in chunk order
+/// (the order a serial pass would write them in): count(begin, end) says how many the chunk writes, then
+/// make_room(total) sizes the output and write(thread, begin, end, first) writes the chunk's items from
+/// index `first` on. Returns the total.
+template <class Count, class MakeRoom, class Write>
+std::size_t run_parallel_packed(std::size_t n, Count&& count, MakeRoom&& make_room, Write&& write) {
+  std::vector<std::size_t> first(static_cast<std::size_t>(max_threads()) + 1, 0);
+  run_parallel(n, [&](int t, std::size_t begin, std::size_t end) {
+    first[static_cast<std::size_t>(t) + 1] = count(begin, end);
+  });
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  make_room(first.back());
+  run_parallel(
+      n, [&](int t, std::size_t begin, std::size_t end) { write(t, begin, end, first[static_cast<std::size_t>(t)]); });
+  return first.back();
 }
 
 }  // namespace rsph

@@ -37,7 +37,6 @@
 #include <cstdint>
 #include <limits>
 #include <numbers>
-#include <numeric>
 #include <span>
 #include <string>
 #include <unordered_map>
@@ -95,8 +94,6 @@ inline void add_periodic_images(const std::vector<Point>& x, const Box<2>& box, 
       s.source[a] = static_cast<std::uint32_t>(a);
     }
   });
-  const auto n_threads = static_cast<std::size_t>(max_threads());
-  std::vector<std::size_t> first(n_threads + 1);
   for (int k = 0; k < 2; ++k) {
     if (!box.periodic(k)) continue;
     const double L = box.hi[k] - box.lo[k], lo = box.lo[k] - margin, hi = box.hi[k] + margin;
@@ -114,23 +111,25 @@ inline void add_periodic_images(const std::vector<Point>& x, const Box<2>& box, 
         }
     };
     const std::size_t n = s.x.size();
-    std::fill(first.begin(), first.end(), 0);
-    run_parallel(n, [&](int t, std::size_t begin, std::size_t end) {
-      std::size_t count = 0;
-      for (std::size_t i = begin; i < end; ++i) for_each_image(i, [&](const Point&) { ++count; });
-      first[static_cast<std::size_t>(t) + 1] = count;
-    });
-    std::partial_sum(first.begin(), first.end(), first.begin());
-    s.x.resize(n + first.back());
-    s.source.resize(n + first.back());
-    run_parallel(n, [&](int t, std::size_t begin, std::size_t end) {
-      std::size_t at = n + first[static_cast<std::size_t>(t)];
-      for (std::size_t i = begin; i < end; ++i)
-        for_each_image(i, [&](const Point& p) {
-          s.x[at] = p;
-          s.source[at++] = s.source[i];
+    run_parallel_packed(
+        n,
+        [&](std::size_t begin, std::size_t end) {
+          std::size_t count = 0;
+          for (std::size_t i = begin; i < end; ++i) for_each_image(i, [&](const Point&) { ++count; });
+          return count;
+        },
+        [&](std::size_t n_images) {
+          s.x.resize(n + n_images);
+          s.source.resize(n + n_images);
+        },
+        [&](int, std::size_t begin, std::size_t end, std::size_t first) {
+          std::size_t at = n + first;
+          for (std::size_t i = begin; i < end; ++i)
+            for_each_image(i, [&](const Point& p) {
+              s.x[at] = p;
+              s.source[at++] = s.source[i];
+            });
         });
-    });
   }
 }
 

@@ -618,51 +618,49 @@ void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<st
   for (std::size_t a = 0; a < p.n_real; ++a) ke_before += 0.5 * p.m[a] * p.v[a].squaredNorm();
   stats.n_before = p.n_real;
   auto emitted = [&](std::size_t c) { return keep[c] && S.m[c] > 0.0; };
-  // Written in parallel: each thread takes a contiguous run of `cells` and writes its particles from the
-  // count of those before its run on, so the order is that of `cells` whatever the thread count.
-  const auto n_threads = static_cast<std::size_t>(max_threads());
-  std::vector<std::size_t> first(n_threads + 1, 0);
-  std::vector<double> ke_after(n_threads, 0.0);
-  rsph::run_parallel(cells.size(), [&](int t, std::size_t begin, std::size_t end) {
-    std::size_t n = 0;
-    for (std::size_t k = begin; k < end; ++k) n += emitted(cells[k]);
-    first[static_cast<std::size_t>(t) + 1] = n;
-  });
-  std::partial_sum(first.begin(), first.end(), first.begin());
-  // The old particles are spent (their sums are in S): the new ones take over their storage, every field
-  // written once below (clearing it first would write the whole set twice).
-  p.ghost_source.clear();
-  p.resize_all(first.back());
-  p.n_real = first.back();
-  rsph::run_parallel(cells.size(), [&](int t, std::size_t begin, std::size_t end) {
-    std::size_t a = first[static_cast<std::size_t>(t)];
-    double ke_sum = 0.0;
-    for (std::size_t k = begin; k < end; ++k) {
-      const std::size_t c = cells[k];
-      if (!emitted(c)) continue;
-      const double m_n = S.m[c];
-      const Vec<D> v_n = S.mv[c] / m_n;  // eq. (8)
-      const double ke = 0.5 * m_n * v_n.squaredNorm();
-      ke_sum += ke;
-      const auto [site, h] = place(c);
-      p.m[a] = m_n;
-      p.x[a] = site;
-      p.v[a] = v_n;
-      p.h[a] = h;
-      p.rho[a] = m_n / S.fill[c];  // the remapped density, for schemes that do not sum eq. (2)
-      if constexpr (E) p.u[a] = std::max(0.0, (S.E[c] - ke) / m_n);  // eq. (9) plus the converted kinetic energy
-      ++a;
-    }
-    ke_after[static_cast<std::size_t>(t)] = ke_sum;
-    // the fields a remap does not set, cleared as whole runs (faster than a store each in the loop)
-    const auto from = static_cast<std::ptrdiff_t>(first[static_cast<std::size_t>(t)]);
-    const auto to = static_cast<std::ptrdiff_t>(a);
-    std::fill(p.P.begin() + from, p.P.begin() + to, 0.0);
-    std::fill(p.cs.begin() + from, p.cs.begin() + to, 0.0);
-    std::fill(p.dv_dt.begin() + from, p.dv_dt.begin() + to, Vec<D>::Zero());
-    if constexpr (E) std::fill(p.du_dt.begin() + from, p.du_dt.begin() + to, 0.0);
-    std::fill(p.frozen.begin() + from, p.frozen.begin() + to, std::uint8_t{0});
-  });
+  // Written in parallel, each thread a contiguous run of `cells`, in the order of `cells` whatever the thread
+  // count. The old particles are spent (their sums are in S): the new ones take over their storage, every
+  // field written once (clearing it first would write the whole set twice).
+  std::vector<double> ke_after(static_cast<std::size_t>(max_threads()), 0.0);
+  p.n_real = run_parallel_packed(
+      cells.size(),
+      [&](std::size_t begin, std::size_t end) {
+        std::size_t n = 0;
+        for (std::size_t k = begin; k < end; ++k) n += emitted(cells[k]);
+        return n;
+      },
+      [&](std::size_t n_new) {
+        p.ghost_source.clear();
+        p.resize_all(n_new);
+      },
+      [&](int t, std::size_t begin, std::size_t end, std::size_t first) {
+        std::size_t a = first;
+        double ke_sum = 0.0;
+        for (std::size_t k = begin; k < end; ++k) {
+          const std::size_t c = cells[k];
+          if (!emitted(c)) continue;
+          const double m_n = S.m[c];
+          const Vec<D> v_n = S.mv[c] / m_n;  // eq. (8)
+          const double ke = 0.5 * m_n * v_n.squaredNorm();
+          ke_sum += ke;
+          const auto [site, h] = place(c);
+          p.m[a] = m_n;
+          p.x[a] = site;
+          p.v[a] = v_n;
+          p.h[a] = h;
+          p.rho[a] = m_n / S.fill[c];  // the remapped density, for schemes that do not sum eq. (2)
+          if constexpr (E) p.u[a] = std::max(0.0, (S.E[c] - ke) / m_n);  // eq. (9) plus the converted kinetic energy
+          ++a;
+        }
+        ke_after[static_cast<std::size_t>(t)] = ke_sum;
+        // the fields a remap does not set, cleared as whole runs (faster than a store each in the loop)
+        const auto from = static_cast<std::ptrdiff_t>(first), to = static_cast<std::ptrdiff_t>(a);
+        std::fill(p.P.begin() + from, p.P.begin() + to, 0.0);
+        std::fill(p.cs.begin() + from, p.cs.begin() + to, 0.0);
+        std::fill(p.dv_dt.begin() + from, p.dv_dt.begin() + to, Vec<D>::Zero());
+        if constexpr (E) std::fill(p.du_dt.begin() + from, p.du_dt.begin() + to, 0.0);
+        std::fill(p.frozen.begin() + from, p.frozen.begin() + to, std::uint8_t{0});
+      });
   stats.n_after = p.n_real;
   stats.kinetic_converted = ke_before;
   for (double ke : ke_after) stats.kinetic_converted -= ke;
