@@ -45,8 +45,12 @@ TEST_CASE("run_parallel visits every index once, in contiguous chunks by thread"
 }
 
 TEST_CASE("run_parallel called from inside a parallel region still covers the whole range", "[core]") {
-  // There the inner team is one thread although max_threads() may say more: the chunks must follow the team.
+  // There the inner team is one thread although max_threads() says two: the chunks must follow the team.
   std::vector<int> complete(64, -1);
+#ifdef _OPENMP
+  const int before = omp_get_max_threads();
+  omp_set_num_threads(2);  // whatever OMP_NUM_THREADS says, the inner calls ask for two
+#endif
 #pragma omp parallel num_threads(2)
   {
     int t = 0;
@@ -56,6 +60,9 @@ TEST_CASE("run_parallel called from inside a parallel region still covers the wh
     const auto c = cover(1000);
     complete[static_cast<std::size_t>(t)] = std::count(c.visits.begin(), c.visits.end(), 1) == 1000;
   }
+#ifdef _OPENMP
+  omp_set_num_threads(before);
+#endif
   CHECK(complete[0] == 1);
   for (std::size_t t = 1; t < complete.size(); ++t) CHECK(complete[t] != 0);  // -1: no such thread
 }

@@ -371,3 +371,22 @@ TEST_CASE("open edges: tails lighter than min_mass_ratio join their neighbours, 
   for (int k : {-30, 30}) r_before = std::max(r_before, std::hypot(k * dx, k * dx));
   CHECK(r_after < r_before + dx);
 }
+
+TEST_CASE("the new particles carry no pressure, rates or frozen flags of the old ones", "[regularize]") {
+  auto p = jittered_gas(20, 0.3, 5);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    p.P[a] = p.cs[a] = p.du_dt[a] = 1.0;
+    p.dv_dt[a] = Vec<2>(1.0, -1.0);
+    p.frozen[a] = 1;
+  }
+  geometry::LocalVoronoi builder;
+  remap_onto_lattice(p, box_with(Edge::periodic, Edge::periodic), lattice::Square{1.0 / 20}, builder, RemapParams{});
+  REQUIRE(p.n_real == 400);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    CHECK(p.P[a] == 0.0);
+    CHECK(p.cs[a] == 0.0);
+    CHECK(p.du_dt[a] == 0.0);
+    CHECK(p.dv_dt[a] == Vec<2>::Zero());
+    CHECK(p.frozen[a] == 0);
+  }
+}

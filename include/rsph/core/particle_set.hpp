@@ -2,6 +2,7 @@
 // Particle data as structure of arrays; ghosts live at the tail, after the n_real real particles.
 #include "rsph/core/dimension.hpp"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <type_traits>
@@ -92,6 +93,17 @@ struct ParticleSet {
     u.resize(n);
     du_dt.resize(n);
     frozen.resize(n);
+  }
+
+  /// Zeroes, over [from, to), every field but the state m, x, v, h, rho and u: pressure, sound speed, rates
+  /// and frozen flags, which a writer of whole new particles (the remap) leaves to the next force pass.
+  void clear_all_but_state(std::size_t from, std::size_t to) {
+    const auto a = static_cast<std::ptrdiff_t>(from), b = static_cast<std::ptrdiff_t>(to);
+    std::fill(P.begin() + a, P.begin() + b, 0.0);
+    std::fill(cs.begin() + a, cs.begin() + b, 0.0);
+    std::fill(dv_dt.begin() + a, dv_dt.begin() + b, Vec<D>::Zero());
+    if constexpr (HasEnergy) std::fill(du_dt.begin() + a, du_dt.begin() + b, 0.0);
+    std::fill(frozen.begin() + a, frozen.begin() + b, std::uint8_t{0});
   }
 
   /// Removes every ghost and the real particles for which remove(a) holds; the rest keep their order.

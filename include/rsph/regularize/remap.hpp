@@ -653,13 +653,7 @@ void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<st
           ++a;
         }
         ke_after[static_cast<std::size_t>(t)] = ke_sum;
-        // the fields a remap does not set, cleared as whole runs (faster than a store each in the loop)
-        const auto from = static_cast<std::ptrdiff_t>(first), to = static_cast<std::ptrdiff_t>(a);
-        std::fill(p.P.begin() + from, p.P.begin() + to, 0.0);
-        std::fill(p.cs.begin() + from, p.cs.begin() + to, 0.0);
-        std::fill(p.dv_dt.begin() + from, p.dv_dt.begin() + to, Vec<D>::Zero());
-        if constexpr (E) std::fill(p.du_dt.begin() + from, p.du_dt.begin() + to, 0.0);
-        std::fill(p.frozen.begin() + from, p.frozen.begin() + to, std::uint8_t{0});
+        p.clear_all_but_state(first, a);  // as whole runs: faster than a store each in the loop
       });
   stats.n_after = p.n_real;
   stats.kinetic_converted = ke_before;
