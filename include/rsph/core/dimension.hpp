@@ -4,8 +4,16 @@
 
 #include <array>
 #include <cmath>
+#include <cstdint>
 
 namespace rsph {
+
+/// floor(x) as an integer index (|x| < 2^62), inline: without SSE4.1, x86-64 compiles std::floor to a library
+/// call, and the cell searches take several per particle.
+inline std::int64_t floor_index(double x) {
+  const auto t = static_cast<std::int64_t>(x);  // truncates towards zero
+  return t - static_cast<std::int64_t>(static_cast<double>(t) > x);
+}
 
 /// Fixed-size position/velocity vector. Never bind an Eigen expression to `auto`.
 template <int D>

@@ -123,18 +123,21 @@ class CellList {
   void block_of(const Vec<D>& box_lo, const Vec<D>& box_hi, std::array<std::int64_t, D>& lo,
                 std::array<std::int64_t, D>& hi) const {
     for (int k = 0; k < D; ++k) {
-      lo[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((box_lo[k] - lo_[k]) * inv_size_)), 0,
-                                       dims_[k] - 1);
-      hi[k] = std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((box_hi[k] - lo_[k]) * inv_size_)), 0,
-                                       dims_[k] - 1);
+      lo[k] = bin_along(k, box_lo[k]);
+      hi[k] = bin_along(k, box_hi[k]);
     }
+  }
+
+  /// The bin along axis k that coordinate x falls in, clamped to the grid (clamped first as a double, so a far
+  /// coordinate cannot overflow the integer).
+  std::int64_t bin_along(int k, double x) const {
+    const double at = std::clamp((x - lo_[k]) * inv_size_, 0.0, static_cast<double>(dims_[k] - 1));
+    return floor_index(at);
   }
 
   std::array<std::int64_t, D> coords(const Vec<D>& p) const {
     std::array<std::int64_t, D> c;
-    for (int k = 0; k < D; ++k)
-      c[k] =
-          std::clamp<std::int64_t>(static_cast<std::int64_t>(std::floor((p[k] - lo_[k]) * inv_size_)), 0, dims_[k] - 1);
+    for (int k = 0; k < D; ++k) c[k] = bin_along(k, p[k]);
     return c;
   }
   std::size_t cell_index(const std::array<std::int64_t, D>& c) const {

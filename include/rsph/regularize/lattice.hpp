@@ -52,8 +52,7 @@ struct Uniform1D {
 
   double cell_volume() const { return spacing; }
   IndexRange<1> cells_touching(const Box<1>& box, const Vec<1>& lo, const Vec<1>& hi) const {
-    return {{static_cast<std::int64_t>(std::floor((lo[0] - box.lo[0]) / spacing))},
-            {static_cast<std::int64_t>(std::floor((hi[0] - box.lo[0]) / spacing))}};
+    return {{floor_index((lo[0] - box.lo[0]) / spacing)}, {floor_index((hi[0] - box.lo[0]) / spacing)}};
   }
   Vec<1> site(const Box<1>& box, std::array<std::int64_t, 1> i) const {
     return Vec<1>(box.lo[0] + (i[0] + 0.5) * spacing);
@@ -81,8 +80,8 @@ struct Square {
   IndexRange<2> cells_touching(const Box<2>& box, const Vec<2>& lo, const Vec<2>& hi) const {
     IndexRange<2> r;
     for (int k = 0; k < 2; ++k) {
-      r.lo[k] = static_cast<std::int64_t>(std::floor((lo[k] - box.lo[k]) / spacing));
-      r.hi[k] = static_cast<std::int64_t>(std::floor((hi[k] - box.lo[k]) / spacing));
+      r.lo[k] = floor_index((lo[k] - box.lo[k]) / spacing);
+      r.hi[k] = floor_index((hi[k] - box.lo[k]) / spacing);
     }
     return r;
   }
@@ -123,10 +122,10 @@ struct Hexagonal {
     // Row j's hexagons span (j + 1/2 -+ 2/3) row pitches in y; in x, hexagon i spans (i - 1/4, i + 3/4)
     // spacings on even rows and half a spacing more on odd ones. A cell that only touches [lo, hi] along a
     // line may be left out (it overlaps nothing).
-    r.lo[1] = static_cast<std::int64_t>(std::floor((lo[1] - box.lo[1]) / row_pitch() - 7.0 / 6.0)) + 1;
-    r.hi[1] = static_cast<std::int64_t>(std::ceil((hi[1] - box.lo[1]) / row_pitch() + 1.0 / 6.0)) - 1;
-    r.lo[0] = static_cast<std::int64_t>(std::floor((lo[0] - box.lo[0]) / spacing - 1.25)) + 1;
-    r.hi[0] = static_cast<std::int64_t>(std::ceil((hi[0] - box.lo[0]) / spacing + 0.25)) - 1;
+    r.lo[1] = floor_index((lo[1] - box.lo[1]) / row_pitch() - 7.0 / 6.0) + 1;
+    r.hi[1] = -floor_index(-((hi[1] - box.lo[1]) / row_pitch() + 1.0 / 6.0)) - 1;
+    r.lo[0] = floor_index((lo[0] - box.lo[0]) / spacing - 1.25) + 1;
+    r.hi[0] = -floor_index(-((hi[0] - box.lo[0]) / spacing + 0.25)) - 1;
     return r;
   }
   Vec<2> site(const Box<2>& box, std::array<std::int64_t, 2> idx) const {
