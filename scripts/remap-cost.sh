@@ -6,7 +6,8 @@
 #   bash scripts/remap-cost.sh [jittered|sheared] [PARTICLES]     (defaults: jittered 100000)
 #
 # Runs build/bin/remap_cost (built with -DRSPH_BUILD_BENCHMARKS=ON; RSPH_BUILD_DIR picks another build) under
-# cachegrind with one and with three remaps, on one thread, and prints the difference over two.
+# cachegrind with one and with three remaps, on one thread, and prints the difference over two, then where it
+# goes: the functions (inlined code counted where it lands) with the most instructions.
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${RSPH_BUILD_DIR:-$root/build}
@@ -35,3 +36,5 @@ n=$(awk '{print $1; exit}' "$work/stdout.3")  # the set's own count (a whole squ
 awk -v ir="$ir" -v b="$branches" -v m="$mispredicts" -v n="$n" -v l="$layout" 'BEGIN {
   printf "remap of %s %s, per remap: %.1f M instructions, %.2f M branches, %.3f M mispredicted (cachegrind)\n", l, n, ir / 1e6, b / 1e6, m / 1e6
   printf "per old particle: %.0f instructions, %.1f branches, %.2f mispredicted\n", ir / n, b / n, m / n }'
+cg_diff "$work/out.1" "$work/out.3" >"$work/diff" 2>/dev/null
+cg_annotate --show=Ir,Bcm --auto=no "$work/diff" 2>/dev/null | /usr/bin/python3 "$root/scripts/cost_by_function.py" "$n"
