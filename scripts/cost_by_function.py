@@ -3,6 +3,7 @@
 into a function counted with it, and prints the eight heaviest per old particle. Argument: the particle count.
 Used by scripts/remap-cost.sh."""
 import re
+import signal
 import sys
 
 ROW = re.compile(r"^\s*([\d,]+) \([ \d.]+%\)\s+(?:([\d,]+) \([ \d.]+%\)|\.)\s+(\S.*)$")
@@ -28,6 +29,7 @@ def short(name):
 
 
 def main():
+    signal.signal(signal.SIGPIPE, signal.SIG_DFL)  # quiet when piped into head
     particles = float(sys.argv[1])
     totals = {}
     for line in sys.stdin:
