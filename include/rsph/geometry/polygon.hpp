@@ -217,12 +217,17 @@ inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, con
       const double yb = last ? r.y() : l.y() + (xb - l.x()) * slope;
       const double weight = sign * (xb - xa);
       const double y_min = std::min(ya, yb), y_max = std::max(ya, yb);
-      const double inv_span = y_max > y_min ? 1.0 / (y_max - y_min) : 0.0;
       double* column = area + static_cast<std::size_t>(c) * static_cast<std::size_t>(n_j);
       int j = 0;
       for (; j < n_j && ys[j + 1] <= y_min; ++j) column[j] += weight * (ys[j + 1] - ys[j]);  // rows wholly below
-      for (; j < n_j && ys[j] < y_max; ++j)
-        column[j] += weight * detail::mean_clamped_height(y_min, y_max, inv_span, ys[j], ys[j + 1]);
+      if (j < n_j && y_max <= ys[j + 1]) {
+        // Within one row, as most pieces are: the mean height is that of the midpoint, with no division.
+        column[j] += weight * (0.5 * (y_min + y_max) - ys[j]);
+      } else {
+        const double inv_span = y_max > y_min ? 1.0 / (y_max - y_min) : 0.0;
+        for (; j < n_j && ys[j] < y_max; ++j)
+          column[j] += weight * detail::mean_clamped_height(y_min, y_max, inv_span, ys[j], ys[j + 1]);
+      }
       if (last) break;
       xa = xb;
       ya = yb;
