@@ -1,8 +1,13 @@
 # Runs CMD (a list) in a fresh OUT folder; passes when it exits non-zero, prints EXPECT on stderr,
-# and leaves no summary.json behind.
+# and leaves no summary.json behind. CMD is given `--out OUT/run` unless NO_OUT is set (a tool without
+# an output folder).
 file(REMOVE_RECURSE ${OUT})
 file(MAKE_DIRECTORY ${OUT})
-execute_process(COMMAND ${CMD} --out ${OUT}/run RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+set(out_args --out ${OUT}/run)
+if(NO_OUT)
+  set(out_args)
+endif()
+execute_process(COMMAND ${CMD} ${out_args} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(rc EQUAL 0)
   message(FATAL_ERROR "expected a non-zero exit, got 0\n${out}\n${err}")
 endif()
