@@ -180,10 +180,10 @@ inline double clipped_area_rect(const ConvexPolygon& p, double x0, double y0, do
 }
 
 namespace detail {
-/// Mean over y in [y0, y1] (y0 <= y1) of clamp(y - lo, 0, hi - lo): the integrand of grid_overlaps.
-/// `inv_span` is 1 / (y1 - y0), or 0 where y0 == y1 (a level segment).
+/// Mean over y in [y0, y1] (y0 < y1) of clamp(y - lo, 0, hi - lo): the integrand of grid_overlaps for a
+/// piece that crosses a row line (a piece within one row, level ones included, takes its midpoint there).
+/// `inv_span` is 1 / (y1 - y0).
 inline double mean_clamped_height(double y0, double y1, double inv_span, double lo, double hi) {
-  if (inv_span == 0.0) return std::clamp(y0, lo, hi) - lo;
   const double s0 = std::clamp(y0, lo, hi), s1 = std::clamp(y1, lo, hi);
   const double inside = (s1 - s0) * (0.5 * (s0 + s1) - lo);
   const double above = std::max(0.0, y1 - std::max(y0, hi)) * (hi - lo);
@@ -223,8 +223,8 @@ inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, con
       if (j < n_j && y_max <= ys[j + 1]) {
         // Within one row, as most pieces are: the mean height is that of the midpoint, with no division.
         column[j] += weight * (0.5 * (y_min + y_max) - ys[j]);
-      } else {
-        const double inv_span = y_max > y_min ? 1.0 / (y_max - y_min) : 0.0;
+      } else if (j < n_j) {  // across a row line: y_max > ys[j + 1] > y_min
+        const double inv_span = 1.0 / (y_max - y_min);
         for (; j < n_j && ys[j] < y_max; ++j)
           column[j] += weight * detail::mean_clamped_height(y_min, y_max, inv_span, ys[j], ys[j + 1]);
       }
