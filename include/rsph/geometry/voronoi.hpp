@@ -175,9 +175,10 @@ inline const Sides& closing_polygon() {
 
 /// Open axes: intersects the cell with a regular 32-gon whose inradius is the closing radius. Only the
 /// sides some vertex lies beyond are tried: a side no vertex crosses cannot cut the cell (nor the points
-/// between its vertices), and for most cells no vertex reaches past the radius at all.
-inline void close_with_disc(ConvexPolygon*& cell, ConvexPolygon*& scratch, const Box<2>& box, double closing_radius) {
-  if (box.edge[0] != Edge::open && box.edge[1] != Edge::open) return;
+/// between its vertices), and for most cells no vertex reaches past the radius at all. Returns whether
+/// the cell was cut.
+inline bool close_with_disc(ConvexPolygon*& cell, ConvexPolygon*& scratch, const Box<2>& box, double closing_radius) {
+  if (box.edge[0] != Edge::open && box.edge[1] != Edge::open) return false;
   const double R2 = closing_radius * closing_radius;
   const Sides& polygon = closing_polygon();
   std::uint32_t crossed = 0;  // bit k: some vertex lies beyond side k
@@ -187,11 +188,12 @@ inline void close_with_disc(ConvexPolygon*& cell, ConvexPolygon*& scratch, const
     for (int k = 0; k < polygon.n; ++k)
       crossed |= static_cast<std::uint32_t>(polygon.normal[static_cast<std::size_t>(k)].dot(v) > closing_radius) << k;
   }
-  if (crossed == 0) return;
+  if (crossed == 0) return false;
   *scratch = with_part_within_sides(
       *cell, polygon, crossed, [&](std::size_t k) { return closing_radius * polygon.offset[k]; },
       [](const ConvexPolygon& part) { return part; });
   std::swap(cell, scratch);
+  return true;
 }
 
 /// Mean spacing of n points in the box (open axes: their bounding box).
@@ -218,9 +220,10 @@ inline double max_radius2_origin(const ConvexPolygon& p) {
 }
 
 /// Whether a cell may be missing a periodic image: its security disc (twice its farthest vertex
-/// distance) reaches beyond the band the images cover. Then the margin is widened and cells rebuilt.
-inline bool needs_more_images(const ConvexPolygon& cell, const Point& xa, const Box<2>& box, double margin) {
-  const double security = 2.0 * std::sqrt(max_radius2_origin(cell));
+/// distance, whose square is r2_max) reaches beyond the band the images cover. Then the margin is widened
+/// and cells rebuilt.
+inline bool needs_more_images(double r2_max, const Point& xa, const Box<2>& box, double margin) {
+  const double security = 2.0 * std::sqrt(r2_max);
   for (int k = 0; k < 2; ++k)
     if (box.periodic(k) && (xa[k] - security < box.lo[k] - margin || xa[k] + security > box.hi[k] + margin))
       return true;
@@ -234,11 +237,13 @@ inline void check_coincident(const ConvexPolygon& cell, std::size_t a) {
 
 /// What both builders do once the neighbours have cut a cell: a coincident particle is an error, open
 /// edges close the cell, and a cell reaching past the periodic images returns false (wider images needed).
+/// `r2_max` is the squared farthest vertex distance of the cell as the neighbours left it (the builders
+/// know it already: another pass over the vertices had cost a mispredicted loop exit per cell).
 inline bool finish_cell(ConvexPolygon*& cell, ConvexPolygon*& scratch, std::size_t a, const Point& xa,
-                        const Box<2>& box, double margin, double closing_radius) {
+                        const Box<2>& box, double margin, double closing_radius, double r2_max) {
   check_coincident(*cell, a);
-  close_with_disc(cell, scratch, box, closing_radius);
-  return !needs_more_images(*cell, xa, box, margin);
+  if (close_with_disc(cell, scratch, box, closing_radius)) r2_max = max_radius2_origin(*cell);
+  return !needs_more_images(r2_max, xa, box, margin);
 }
 
 /// Runs try_build(margin) with periodic images over a margin of 4 mean spacings, doubling it (and
@@ -341,7 +346,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
   /// sides are nearly parallel (near-coincident sites: an ill-conditioned vertex), or when a candidate coincides
   /// with the particle.
   static bool cell_from_dual_hull(std::span<const Candidate> candidates, const Point& lo, const Point& hi,
-                                  ConvexPolygon& cell) {
+                                  ConvexPolygon& cell, double& r2_max) {
     const std::size_t k = candidates.size();
     if (k < 3 || k > ConvexPolygon::capacity) return false;
     std::array<double, ConvexPolygon::capacity> qx, qy;
@@ -411,6 +416,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
     }
     --n_hull;  // the start, taken twice
     if (n_hull < 3 || undecided) return false;
+    double r2 = 0.0;
     for (std::size_t i = 0, j = n_hull - 1; i < n_hull; j = i++) {  // vertex of the sides of hull[j] and hull[i]
       const std::size_t a = hull[j], b = hull[i];
       // det > 0 for every edge: the hull goes round the origin, so the sides bound the cell
@@ -418,8 +424,10 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
       if (!vertex(a, b, v)) return false;
       if (!(v.x() > lo.x() && v.y() > lo.y() && v.x() < hi.x() && v.y() < hi.y())) return false;
       cell.v[i] = v;
+      r2 = std::max(r2, v.squaredNorm());
     }
     cell.n = static_cast<int>(n_hull);
+    r2_max = r2;
     return true;
   }
 
@@ -505,9 +513,8 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
             }
           });
           const std::span<Candidate> disc(found.data(), n_found);
-          if (inner2 < 0.0 && cell_from_dual_hull(disc, (*cell)[0], (*cell)[2], *scratch)) {
+          if (inner2 < 0.0 && cell_from_dual_hull(disc, (*cell)[0], (*cell)[2], *scratch, r2_max)) {
             std::swap(cell, scratch);
-            r2_max = detail::max_radius2_origin(*cell);
             ++by_hull;
           } else {
             std::sort(disc.begin(), disc.end(), [](const Candidate& p, const Candidate& q) { return p.d2 < q.d2; });
@@ -520,7 +527,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
           }
           inner2 = outer2;
         }
-        if (!detail::finish_cell(cell, scratch, a, xa, box, margin, closing)) {
+        if (!detail::finish_cell(cell, scratch, a, xa, box, margin, closing, r2_max)) {
           ok.store(false, std::memory_order_relaxed);
           break;
         }
@@ -616,7 +623,7 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
           if (cell->empty()) break;
           cut_group(nb);
         }
-        if (!detail::finish_cell(cell, scratch, a, xa, box, margin, closing)) {
+        if (!detail::finish_cell(cell, scratch, a, xa, box, margin, closing, detail::max_radius2_origin(*cell))) {
           ok.store(false, std::memory_order_relaxed);
           break;
         }
