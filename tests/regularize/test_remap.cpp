@@ -89,14 +89,14 @@ TEST_CASE("hexagonal lattice: each overlap equals Boost.Geometry's intersection 
       const regularize::detail::CellGrid<2>* grid;
       Vec<2> L;
       struct Tally {  // per thread: cells arrive from every builder thread at once
-        std::size_t cells = 0, overlaps = 0;
+        std::size_t cells = 0, overlaps = 0, sums_differing = 0;
         double worst = 0.0, worst_sum = 0.0;
       };
       std::vector<Tally> tallies = std::vector<Tally>(static_cast<std::size_t>(geometry::builder_threads()));
       void restart() {}
       void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell,
-                      const std::vector<std::pair<std::size_t, double>>& ov, double cell_area) {
-        auto& [cells, overlaps, worst, worst_sum] = tallies[static_cast<std::size_t>(thread)];
+                      std::span<const regularize::detail::Overlap> ov, double V_o, double cell_area) {
+        auto& [cells, overlaps, sums_differing, worst, worst_sum] = tallies[static_cast<std::size_t>(thread)];
         double sum = 0.0;
         for (const auto& [flat, omega] : ov) {
           const auto idx = grid->unflat(flat);
@@ -107,6 +107,7 @@ TEST_CASE("hexagonal lattice: each overlap equals Boost.Geometry's intersection 
           sum += omega;
         }
         worst_sum = std::max(worst_sum, std::abs(sum - geometry::area(cell)) / cell_area);
+        sums_differing += V_o != sum;  // the pass's own sum, in the same order: the same bits
         ++cells;
         overlaps += ov.size();
       }
@@ -116,6 +117,7 @@ TEST_CASE("hexagonal lattice: each overlap equals Boost.Geometry's intersection 
     for (const auto& t : record.tallies) {
       all.cells += t.cells;
       all.overlaps += t.overlaps;
+      all.sums_differing += t.sums_differing;
       all.worst = std::max(all.worst, t.worst);
       all.worst_sum = std::max(all.worst_sum, t.worst_sum);
     }
@@ -124,6 +126,7 @@ TEST_CASE("hexagonal lattice: each overlap equals Boost.Geometry's intersection 
     CHECK(all.overlaps > 3 * all.cells);  // a jittered cell spans several hexagons
     CHECK(all.worst < 1e-13);
     CHECK(all.worst_sum < 1e-13);
+    CHECK(all.sums_differing == 0);
   }
 }
 

@@ -147,6 +147,19 @@ inline Bounds bounds(const ConvexPolygon& p) {
   return b;
 }
 
+/// Bounds and shoelace area in one pass over the vertices (a remap asks both of every old cell; each pass
+/// over a cell's varying count of vertices ends in a mispredicted branch).
+inline double area_and_bounds(const ConvexPolygon& p, Bounds& b) {
+  b = {p[0], p[0]};
+  double a = 0.0;
+  for (int i = 0, j = p.n - 1; i < p.n; j = i++) {
+    a += p[j].x() * p[i].y() - p[i].x() * p[j].y();
+    b.lo = b.lo.cwiseMin(p[i]);
+    b.hi = b.hi.cwiseMax(p[i]);
+  }
+  return p.n < 3 ? 0.0 : 0.5 * a;
+}
+
 /// Area of p inside the rectangle [x0, x1] x [y0, y1]; `pb` are p's bounds and `p_area` its area,
 /// so that sides which cannot cut are skipped.
 inline double clipped_area_rect(const ConvexPolygon& p, const Bounds& pb, double p_area, double x0, double y0,

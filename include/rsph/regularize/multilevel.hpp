@@ -263,14 +263,13 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
     void restart() {
       for (auto& s : sums) s.resize(s.m.size());
     }
-    void operator()(int thread, std::size_t a, const ConvexPolygon& cell,
-                    const std::vector<std::pair<std::size_t, double>>& ov, double) {
-      double V_o = 0.0, A_F = 0.0, best = 0.0;
+    void operator()(int thread, std::size_t a, const ConvexPolygon& cell, std::span<const detail::Overlap> ov,
+                    double V_o, double) {
+      double A_F = 0.0, best = 0.0;
       std::int32_t best_face = -1;
       auto& cand = candidates[static_cast<std::size_t>(thread)];
       cand.clear();
       for (const auto& [f, omega] : ov) {
-        V_o += omega;
         const std::int32_t k = (*face_of)[(*owner)[f]];
         if (k < 0) continue;
         A_F += omega;

@@ -59,6 +59,9 @@ struct RemapStats {
 
 namespace detail {
 
+/// An old cell's overlap with one new cell: (flat index of the new cell, Omega_n^o).
+using Overlap = std::pair<std::size_t, double>;
+
 /// Per-thread sums over old particles for each new cell of a dense index grid.
 template <int D>
 struct alignas(64) Sums {          // one per thread: aligned so that no two threads write to one cache line
@@ -73,12 +76,10 @@ struct alignas(64) Sums {          // one per thread: aligned so that no two thr
     mv.assign(n, Vec<D>::Zero());
     max_mismatch = 0.0;
   }
-  /// Adds old particle (m_o, v_o, e_o) to the cells `idx` with overlaps `omega`; V_o = sum omega
-  /// (eq. 7), so its mass m_o is handed out exactly. `exact_volume` is the cell's own area, for the log.
-  void add(const std::vector<std::pair<std::size_t, double>>& overlaps, double m_o, const Vec<D>& v_o, double e_o,
+  /// Adds old particle (m_o, v_o, e_o) to the cells `idx` with overlaps `omega`; V_o, the sum of the omega
+  /// (eq. 7), hands its mass m_o out exactly. `exact_volume` is the cell's own area, for the log.
+  void add(std::span<const Overlap> overlaps, double V_o, double m_o, const Vec<D>& v_o, double e_o,
            double exact_volume) {
-    double V_o = 0.0;
-    for (const auto& ov : overlaps) V_o += ov.second;
     if (!(V_o > 0.0)) throw NumericalError("regularization: an old cell overlaps no new cell");
     max_mismatch = std::max(max_mismatch, std::abs(V_o - exact_volume) / exact_volume);
     const double density = m_o / V_o;
@@ -244,7 +245,7 @@ void for_each_old_interval(const ParticleSet<1, E>& p, const Box<1>& box, const 
   std::iota(order.begin(), order.end(), 0u);
   std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return p.x[a][0] < p.x[b][0]; });
   const double L = box.hi[0] - box.lo[0];
-  std::vector<std::pair<std::size_t, double>> overlaps;
+  std::vector<Overlap> overlaps;
   for (std::size_t k = 0; k < n_old; ++k) {
     const std::uint32_t a = order[k];
     const double xa = p.x[a][0];
@@ -311,8 +312,9 @@ CellSides<Lattice> cell_sides(const Lattice& lattice) {
 }
 
 /// Visits every old particle's closed Voronoi cell (2D) with its overlaps on the cells of `grid`:
-/// action(thread, a, cell, overlaps, cell_area), the cell relative to x_a and overlaps as (flat index,
-/// Omega). The builder may restart (wider periodic images): action.restart() then forgets what it saw.
+/// action(thread, a, cell, overlaps, V_o, cell_area), the cell relative to x_a, overlaps as (flat index,
+/// Omega) and V_o their sum, in their order. The builder may restart (wider periodic images): action.restart() then
+/// forgets what it saw.
 template <class Lattice, class Builder, bool E, class Region, class Action>
 void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Lattice& lattice, Builder& builder,
                        const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& workspace, Action& action,
@@ -325,7 +327,7 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
     const Region* region;
     Action* action;
     struct alignas(64) Scratch {  // per thread, a cache line apart
-      std::vector<std::pair<std::size_t, double>> overlaps;
+      std::vector<Overlap> overlaps;
       std::vector<double> lines, omegas;
       std::vector<std::int64_t> parts;
     };
@@ -394,17 +396,21 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
     }
     void add_cell(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
       auto& own = scratch[static_cast<std::size_t>(thread)];
-      auto& ov = own.overlaps;
-      ov.clear();
+      std::size_t n_ov = 0;  // own.overlaps is scratch that keeps its size
       const Vec<2> xo = p->x[a];
-      const geometry::Bounds cb = geometry::bounds(cell);
-      const double cell_area = geometry::area(cell);
+      geometry::Bounds cb;
+      const double cell_area = geometry::area_and_bounds(cell, cb);
       const auto r = lattice->cells_touching(*box, Vec<2>(cb.lo + xo), Vec<2>(cb.hi + xo));
+      double V_o = 0.0;
+      auto beyond_grid = [&] {
+        return NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
+                              std::to_string(a) + ")");
+      };
       auto add_overlap = [&](std::int64_t col_part, std::int64_t row_part, double omega) {
-        if ((col_part | row_part) < 0)
-          throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
-                               std::to_string(a) + ")");
-        ov.emplace_back(static_cast<std::size_t>(col_part + row_part), omega);
+        if ((col_part | row_part) < 0) throw beyond_grid();
+        grown(own.overlaps, n_ov + 1)[n_ov] = {static_cast<std::size_t>(col_part + row_part), omega};
+        ++n_ov;
+        V_o += omega;
       };
       if constexpr (Lattice::rectangular_cells) {
         // All overlaps in one pass over the cell's edges; round-off crumbs in cells the old cell only
@@ -422,12 +428,21 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
         std::int64_t* rows = cols + n_i;
         for (int i = 0; i < n_i; ++i) cols[i] = axis_part(0, r.lo[0] + i);
         for (int j = 0; j < n_j; ++j) rows[j] = axis_part(1, r.lo[1] + j);
+        // Each overlap is written and kept by advancing the count, without a branch (whether a cell of the grid
+        // holds more than a crumb is a coin toss); so is the check that a kept one lies inside the grid.
         const double crumb = 1e-13 * cell_area;
+        auto* out = grown(own.overlaps, static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j));
+        std::int64_t outside = 0;
         for (int i = 0; i < n_i; ++i)
           for (int j = 0; j < n_j; ++j) {
             const double omega = omegas[i * n_j + j];
-            if (omega > crumb) add_overlap(cols[i], rows[j], omega);
+            const bool kept = omega > crumb;
+            out[n_ov] = {static_cast<std::size_t>(cols[i] + rows[j]), omega};
+            outside |= kept ? cols[i] | rows[j] : 0;
+            V_o += kept ? omega : 0.0;
+            n_ov += kept;
           }
+        if (outside < 0) throw beyond_grid();
       } else {
         // Every lattice cell is the lattice's shape moved to its site, so all have the same side normals: the
         // old cell's extent along each, taken once, tells for each candidate which sides cut the old cell
@@ -472,7 +487,7 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
             if (omega > 0.0) add_overlap(axis_part(0, i), axis_part(1, j), omega);
           }
       }
-      (*action)(thread, a, cell, ov, cell_area);
+      (*action)(thread, a, cell, std::span<const Overlap>(own.overlaps.data(), n_ov), V_o, cell_area);
     }
   };
   Visitor visitor{&p,
@@ -509,7 +524,9 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
   if constexpr (D == 1) {
     for_each_old_interval(p, box, lattice, params, grid,
                           [&](std::size_t a, double left, double right, const auto& overlaps) {
-                            sums[0].add(overlaps, p.m[a], p.v[a], specific_energy(a), right - left);
+                            double V_o = 0.0;
+                            for (const auto& ov : overlaps) V_o += ov.second;
+                            sums[0].add(overlaps, V_o, p.m[a], p.v[a], specific_energy(a), right - left);
                           });
   } else {
     static_assert(D == 2, "the remap supports 1D and 2D");
@@ -527,7 +544,7 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
         for (auto& s : *sums) s.resize(s.m.size());
       }
       void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell,
-                      const std::vector<std::pair<std::size_t, double>>& ov, double cell_area) {
+                      std::span<const detail::Overlap> ov, double V_o, double cell_area) {
         if (reach) (*reach)[a] = geometry::max_radius(cell, geometry::Point::Zero());
         const double e_o = [&] {
           if constexpr (E)
@@ -535,7 +552,7 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
           else
             return 0.0;
         }();
-        (*sums)[static_cast<std::size_t>(thread)].add(ov, p->m[a], p->v[a], e_o, cell_area);
+        (*sums)[static_cast<std::size_t>(thread)].add(ov, V_o, p->m[a], p->v[a], e_o, cell_area);
       }
     };
     if (record_reach) workspace.reach.resize(n_old);
