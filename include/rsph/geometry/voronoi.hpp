@@ -409,11 +409,11 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
       const double reach = db.dot(v);
       return reach - 0.5 * b2 > 1e-13 * (std::abs(reach) + 0.5 * b2);
     };
-    for (std::size_t m = 0, at = first; m <= k; ++m) {  // the start again at the end closes the hull
-      const std::size_t c = order[at];
+    for (std::size_t m = 0; m <= k; ++m) {  // the start again at the end closes the hull
+      const std::size_t at = first + m;
+      const std::size_t c = order[at - k * static_cast<std::size_t>(at >= k)];  // wrapped without a branch
       while (n_hull >= 2 && !turns_left(hull[n_hull - 2], hull[n_hull - 1], c)) --n_hull;
       hull[n_hull++] = static_cast<std::uint8_t>(c);
-      if (++at == k) at = 0;
     }
     --n_hull;  // the start, taken twice
     if (n_hull < 3 || undecided) return false;
