@@ -36,6 +36,25 @@ TEST_CASE("polygon area, centroid and half-plane clipping", "[geometry]") {
   CHECK(area(ConvexPolygon::regular(Point(0, 0), 1.0, 6)) == Approx(1.5 * std::sqrt(3.0)));
 }
 
+TEST_CASE("area and bounds in one pass equal the two passes to the bit", "[geometry]") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    const ConvexPolygon p = random_convex(rng, Point(u(rng), u(rng)), 0.1 + std::abs(u(rng)));
+    Bounds b;
+    CHECK(area_and_bounds(p, b) == area(p));
+    CHECK(b.lo == bounds(p).lo);
+    CHECK(b.hi == bounds(p).hi);
+  }
+  ConvexPolygon degenerate;  // two vertices: no area, bounds of the two
+  degenerate.push(Point(0.0, 1.0));
+  degenerate.push(Point(2.0, -1.0));
+  Bounds b;
+  CHECK(area_and_bounds(degenerate, b) == 0.0);
+  CHECK(b.lo == Point(0.0, -1.0));
+  CHECK(b.hi == Point(2.0, 1.0));
+}
+
 TEST_CASE("clipping agrees with Boost.Geometry's intersection", "[geometry]") {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -189,7 +189,9 @@ inline double clipped_area_rect(const ConvexPolygon& p, const Bounds& pb, double
 
 /// Area of p inside the rectangle [x0, x1] x [y0, y1].
 inline double clipped_area_rect(const ConvexPolygon& p, double x0, double y0, double x1, double y1) {
-  return clipped_area_rect(p, bounds(p), area(p), x0, y0, x1, y1);
+  Bounds pb;
+  const double p_area = area_and_bounds(p, pb);
+  return clipped_area_rect(p, pb, p_area, x0, y0, x1, y1);
 }
 
 namespace detail {

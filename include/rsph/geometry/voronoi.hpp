@@ -344,7 +344,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
   /// Returns false, leaving the cell to the clips, when the region is not bounded strictly inside the initial
   /// rectangle [lo, hi] (the candidates do not surround the particle, or the cell reaches a wall), when two
   /// sides are nearly parallel (near-coincident sites: an ill-conditioned vertex), or when a candidate coincides
-  /// with the particle.
+  /// with the particle. On success r2_max receives the squared distance of the cell's farthest vertex.
   static bool cell_from_dual_hull(std::span<const Candidate> candidates, const Point& lo, const Point& hi,
                                   ConvexPolygon& cell, double& r2_max) {
     const std::size_t k = candidates.size();
