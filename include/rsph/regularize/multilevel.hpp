@@ -427,12 +427,11 @@ void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const latti
   std::vector<Vec<1>> mv(n_faces, Vec<1>::Zero());
   std::vector<std::int32_t> cand;
   std::vector<double> om;
-  for_each_old_interval(p, box, fine, params, grid, [&](std::size_t a, double left, double right, const auto& ov) {
-    double V_o = 0.0, A_F = 0.0, best = 0.0;
+  auto hand_out = [&](std::size_t a, double left, double right, const auto& ov, double V_o) {
+    double A_F = 0.0, best = 0.0;
     std::int32_t best_face = -1;
     cand.clear();
     for (const auto& [f, omega] : ov) {
-      V_o += omega;
       const std::int32_t k = face_of[owner[f]];
       if (k < 0) continue;
       A_F += omega;
@@ -478,7 +477,8 @@ void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const latti
     const double scale = A_F / A_poly;  // the finest-cell pass's share, so sums stay exact
     for (std::size_t i = 0; i < cand.size(); ++i)
       if (om[i] > 0.0) add(static_cast<std::size_t>(cand[i]), om[i] * scale);
-  });
+  };
+  for_each_old_interval(p, box, fine, params, grid, hand_out);
   for (std::size_t k = 0; k < n_faces; ++k) {
     const std::size_t c = faces[k];
     cells.m[c] = m[k];

@@ -235,8 +235,8 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
 }
 
 /// 1D old cells: the intervals between midpoints to the neighbours (walls and periodic wrap at the ends,
-/// a closing radius on open ends). Calls visit(a, left, right, overlaps) with the overlaps on the cells of
-/// `grid` as (flat index, length), in order of position.
+/// a closing radius on open ends). Calls visit(a, left, right, overlaps, V_o) with the overlaps on the cells of
+/// `grid` as (flat index, length), in order of position, and V_o their sum in their order (as in 2D).
 template <class Lattice, bool E, class Visit>
 void for_each_old_interval(const ParticleSet<1, E>& p, const Box<1>& box, const Lattice& lattice,
                            const RemapParams& params, const CellGrid<1>& grid, Visit&& visit) {
@@ -276,6 +276,7 @@ void for_each_old_interval(const ParticleSet<1, E>& p, const Box<1>& box, const 
     if (!(right > left))
       throw InputError("regularization: particle " + std::to_string(a) + " coincides with another particle");
     overlaps.clear();
+    double V_o = 0.0;
     const auto r = lattice.cells_touching(box, Vec<1>(left), Vec<1>(right));
     for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
       const auto [c0, c1] = lattice.cell(box, i);
@@ -284,8 +285,9 @@ void for_each_old_interval(const ParticleSet<1, E>& p, const Box<1>& box, const 
       std::int64_t f = grid.flat({i});
       if (f < 0) f = grid.flat({std::clamp(i, grid.range.lo[0], grid.range.hi[0])});  // sliver beyond a wall
       overlaps.emplace_back(static_cast<std::size_t>(f), omega);
+      V_o += omega;
     }
-    visit(static_cast<std::size_t>(a), left, right, overlaps);
+    visit(static_cast<std::size_t>(a), left, right, overlaps, V_o);
   }
 }
 
@@ -523,9 +525,7 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
 
   if constexpr (D == 1) {
     for_each_old_interval(p, box, lattice, params, grid,
-                          [&](std::size_t a, double left, double right, const auto& overlaps) {
-                            double V_o = 0.0;
-                            for (const auto& ov : overlaps) V_o += ov.second;
+                          [&](std::size_t a, double left, double right, const auto& overlaps, double V_o) {
                             sums[0].add(overlaps, V_o, p.m[a], p.v[a], specific_energy(a), right - left);
                           });
   } else {
