@@ -194,27 +194,18 @@ inline double clipped_area_rect(const ConvexPolygon& p, double x0, double y0, do
   return clipped_area_rect(p, pb, p_area, x0, y0, x1, y1);
 }
 
-namespace detail {
-/// Mean over y in [y0, y1] (y0 < y1) of clamp(y - lo, 0, hi - lo): the integrand of grid_overlaps for a
-/// piece that crosses a row line (a piece within one row, level ones included, takes its midpoint there).
-/// `inv_span` is 1 / (y1 - y0).
-inline double mean_clamped_height(double y0, double y1, double inv_span, double lo, double hi) {
-  const double s0 = std::clamp(y0, lo, hi), s1 = std::clamp(y1, lo, hi);
-  const double inside = (s1 - s0) * (0.5 * (s0 + s1) - lo);
-  const double above = std::max(0.0, y1 - std::max(y0, hi)) * (hi - lo);
-  return (inside + above) * inv_span;
-}
-}  // namespace detail
-
-/// Areas of the convex polygon p inside every cell [xs[i], xs[i+1]] x [ys[j], ys[j+1]] of a rectangular
-/// grid whose ascending lines xs (n_i + 1) and ys (n_j + 1) cover p's bounds; area[i * n_j + j] receives
-/// the cell's area. By Green's theorem the area in column i and row j is -(contour integral of
-/// clamp(y - ys[j], 0, ys[j+1] - ys[j]) dx) along p's boundary inside column i, so one pass over the
-/// edges, each split at the column lines, gives every overlap at once (instead of clipping p against each
-/// cell). Cells p only touches get zero or round-off crumbs of either sign; the areas sum to area(p).
-/// `area` holds n_i * n_j values and is overwritten.
-inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, const double* ys, int n_j, double* area) {
-  std::fill_n(area, static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j), 0.0);
+/// grid_overlaps with the number of rows NJ fixed at compile time, or given as n_j where NJ is 0.
+/// A piece of edge over one column, y linear from y_min to y_max, has the mean height above a line Y of
+/// F(Y) = (y_max - t)^2 / (2 (y_max - y_min)) + (u - Y), u = max(Y, y_min), t = min(u, y_max); row j takes
+/// F(ys[j]) - F(ys[j+1]) times the piece's signed width. So `area` first sums, per column, width * F at each
+/// line below the top one (the top line lies above the polygon: F = 0), and is differenced in place at the
+/// end. The first term is a triangle, d = y_max - t high and min(d |dx / dy|, width) wide: no piece divides.
+/// Every line takes every piece without a branch, a loop of fixed length where NJ is given, where the rows'
+/// own loops (the rows wholly below a piece, then those it crosses) ended after counts no predictor learns.
+template <int NJ = 0>
+void grid_overlaps_in_rows(const ConvexPolygon& p, const double* xs, int n_i, const double* ys, int n_j, double* area) {
+  const int rows = NJ > 0 ? NJ : n_j;
+  std::fill_n(area, static_cast<std::size_t>(n_i) * static_cast<std::size_t>(rows), 0.0);
   for (int e = 0, prev = p.n - 1; e < p.n; prev = e++) {
     const Point& P = p[prev];
     const Point& Q = p[e];
@@ -222,31 +213,54 @@ inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, con
     const bool rightwards = P.x() < Q.x();
     const Point& l = rightwards ? P : Q;
     const Point& r = rightwards ? Q : P;
-    const double sign = rightwards ? -1.0 : 1.0;
+    const double sign = rightwards ? -1.0 : 1.0;  // the contour integral runs from P to Q
     const double slope = (r.y() - l.y()) / (r.x() - l.x());
+    const double rise = r.y() - l.y();  // level edges have no height above a line (d = 0): any finite run
+    const double run = std::min(std::abs((r.x() - l.x()) / (rise + static_cast<double>(rise == 0.0))), 1e300);
     int c = 0;
     while (c + 1 < n_i && xs[c + 1] <= l.x()) ++c;
     for (double xa = l.x(), ya = l.y(); c < n_i; ++c) {
       const bool last = c + 1 == n_i || r.x() <= xs[c + 1];
       const double xb = last ? r.x() : xs[c + 1];
       const double yb = last ? r.y() : l.y() + (xb - l.x()) * slope;
-      const double weight = sign * (xb - xa);
+      const double width = xb - xa, weight = sign * width;
       const double y_min = std::min(ya, yb), y_max = std::max(ya, yb);
-      double* column = area + static_cast<std::size_t>(c) * static_cast<std::size_t>(n_j);
-      int j = 0;
-      for (; j < n_j && ys[j + 1] <= y_min; ++j) column[j] += weight * (ys[j + 1] - ys[j]);  // rows wholly below
-      if (j < n_j && y_max <= ys[j + 1]) {
-        // Within one row, as most pieces are: the mean height is that of the midpoint, with no division.
-        column[j] += weight * (0.5 * (y_min + y_max) - ys[j]);
-      } else if (j < n_j) {  // across a row line: y_max > ys[j + 1] > y_min
-        const double inv_span = 1.0 / (y_max - y_min);
-        for (; j < n_j && ys[j] < y_max; ++j)
-          column[j] += weight * detail::mean_clamped_height(y_min, y_max, inv_span, ys[j], ys[j + 1]);
+      double* column = area + static_cast<std::size_t>(c) * static_cast<std::size_t>(rows);
+      column[0] += weight * (0.5 * (ya + yb) - ys[0]);  // the bottom line lies below: F is the mean height
+      for (int k = 1; k < rows; ++k) {
+        // min and max of two variables: compilers keep these free of branches (a max against 0 they do not)
+        const double u = std::max(ys[k], y_min), d = y_max - std::min(u, y_max);
+        column[k] += 0.5 * sign * d * std::min(d * run, width) + weight * (u - ys[k]);
       }
       if (last) break;
       xa = xb;
       ya = yb;
     }
+  }
+  for (int c = 0; c < n_i; ++c) {
+    double* column = area + static_cast<std::size_t>(c) * static_cast<std::size_t>(rows);
+    for (int j = 0; j + 1 < rows; ++j) column[j] -= column[j + 1];
+  }
+}
+
+/// Areas of the convex polygon p inside every cell [xs[i], xs[i+1]] x [ys[j], ys[j+1]] of a rectangular
+/// grid whose ascending lines xs (n_i + 1) and ys (n_j + 1) cover p's bounds; area[i * n_j + j] receives
+/// the cell's area. By Green's theorem the area in column i and row j is -(contour integral of
+/// clamp(y - ys[j], 0, ys[j+1] - ys[j]) dx) along p's boundary inside column i, so one pass over the
+/// edges, each split at the column lines, gives every overlap at once (instead of clipping p against each
+/// cell). Cells p only touches get zero or round-off crumbs of either sign; the areas sum to area(p).
+/// `area` holds n_i * n_j values and is overwritten. Up to 3 rows, the count an old cell meets on a lattice
+/// of about its own spacing, the loops over the rows have fixed lengths.
+inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, const double* ys, int n_j, double* area) {
+  switch (n_j) {
+    case 1:
+      return grid_overlaps_in_rows<1>(p, xs, n_i, ys, n_j, area);
+    case 2:
+      return grid_overlaps_in_rows<2>(p, xs, n_i, ys, n_j, area);
+    case 3:
+      return grid_overlaps_in_rows<3>(p, xs, n_i, ys, n_j, area);
+    default:
+      return grid_overlaps_in_rows(p, xs, n_i, ys, n_j, area);
   }
 }
 
