@@ -214,8 +214,8 @@ void grid_overlaps_in_rows(const ConvexPolygon& p, const double* xs, int n_i, co
     const Point& l = rightwards ? P : Q;
     const Point& r = rightwards ? Q : P;
     const double sign = rightwards ? -1.0 : 1.0;  // the contour integral runs from P to Q
-    const double slope = (r.y() - l.y()) / (r.x() - l.x());
-    const double rise = r.y() - l.y();  // level edges have no height above a line (d = 0): any finite run
+    const double rise = r.y() - l.y(), slope = rise / (r.x() - l.x());
+    // level edges have no height above a line (d = 0): any finite run does
     const double run = std::min(std::abs((r.x() - l.x()) / (rise + static_cast<double>(rise == 0.0))), 1e300);
     int c = 0;
     while (c + 1 < n_i && xs[c + 1] <= l.x()) ++c;
