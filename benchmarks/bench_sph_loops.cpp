@@ -9,6 +9,8 @@
 #include <cmath>
 #include <memory>
 #include <random>
+#include <tuple>
+#include <vector>
 
 using namespace rsph;
 
@@ -33,19 +35,31 @@ std::unique_ptr<Sim> make_lattice(std::int64_t n_particles, double h_over_dx) {
                                physics::ArtificialViscosity{1.0, 2.0});
 }
 
+// The passes alone (physics/loops/), over the particles, ghosts and neighbour lists the simulation set up.
 template <bool Forces>
 void BM_loop(benchmark::State& state) {
   const double h_over_dx = static_cast<double>(state.range(1)) / 10.0;
   const int threads = bench::use_threads(state);
   auto sim = make_lattice(state.range(0), h_over_dx);
+  auto p = sim->particles();
+  const auto& nl = sim->neighbor_list();
+  const neighbors::FirstN rows{p.n_real};
+  const auto terms = std::tuple{physics::ArtificialViscosity{1.0, 2.0}};
+  std::vector<double> P_over_rho2, v_sig, drho_dt;
+  physics::loops::NumberDensity unused;
+  physics::loops::update_pressure<2>(sim->eos(), p, P_over_rho2);
   for (auto _ : state) {
-    if constexpr (Forces)
-      sim->compute_forces();
-    else
-      sim->compute_density();
-    benchmark::DoNotOptimize(sim->particles().rho.data());
+    if constexpr (Forces) {
+      physics::loops::ForceFields<2> fields;
+      fields.P_over_rho2 = P_over_rho2;
+      physics::loops::force_rows<Sim::LoopScheme, false>(p, nl, rows, fields, terms, 0.0, {v_sig, drho_dt});
+    } else {
+      physics::loops::density_rows<Sim::KernelType, 2, true, false>(p, nl, rows, unused);
+      physics::loops::update_pressure<2>(sim->eos(), p, P_over_rho2);
+    }
+    benchmark::DoNotOptimize(p.rho.data());
   }
-  const auto n = static_cast<std::int64_t>(sim->particles().n_real);
+  const auto n = static_cast<std::int64_t>(p.n_real);
   state.SetItemsProcessed(state.iterations() * n);
   state.counters["threads"] = threads;
   state.counters["neighbours"] = static_cast<double>(sim->neighbor_list().pairs()) / static_cast<double>(n);

@@ -32,7 +32,7 @@ bool adaptive_fires(double scale, schedule::Adaptive<Kernel, 2> adaptive) {
   info.neighbors = &sim.neighbor_list();
   auto& schedule = sim.regularizer().schedule();
   const bool fires = schedule.due(sim.particles(), box, info);
-  info.number_density = &sim.number_density();  // the driver's eq. (A1) sums decide the same
+  info.number_density = sim.number_density();  // the driver's eq. (A1) sums decide the same
   REQUIRE(schedule.due(sim.particles(), box, info) == fires);
   return fires;
 }

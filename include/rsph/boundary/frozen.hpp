@@ -2,8 +2,12 @@
 // Frozen particles: flagged in ParticleSet::frozen, they take part in every sum but are not
 // integrated; their x and v follow a prescribed motion (the Keplerian boundary zones of §5).
 #include "rsph/core/dimension.hpp"
+#include "rsph/core/particle_set.hpp"
+#include "rsph/physics/concept.hpp"
 
 #include <cstddef>
+#include <tuple>
+#include <type_traits>
 #include <utility>
 
 namespace rsph::boundary {
@@ -18,5 +22,39 @@ struct PrescribedMotion {
     motion(i, t, x, v);
   }
 };
+
+/// Moves the frozen particles over a step of dt that ends at `time`: each PrescribedMotion term sets their
+/// x and v, each BoundaryZone term turns those inside it.
+template <int D, bool E, class... Terms>
+void prescribe_frozen(const std::tuple<Terms...>& terms, ParticleSet<D, E>& p, double time, double dt) {
+  auto apply_motion = [&](const auto& t) {
+    using T = std::decay_t<decltype(t)>;
+    if constexpr (rsph::PrescribedMotion<T, D>)
+      for (std::size_t a = 0; a < p.n_real; ++a)
+        if (p.frozen[a]) t.prescribe(a, p.x[a], p.v[a], time);
+    if constexpr (BoundaryZone<T, D>) {
+      const std::size_t n = p.n_real;
+#pragma omp parallel for schedule(static)
+      for (std::size_t a = 0; a < n; ++a)
+        if (p.frozen[a] && t.contains(p.x[a])) t.advance(p.x[a], p.v[a], dt);
+    }
+  };
+  std::apply([&](const auto&... term) { (apply_motion(term), ...); }, terms);
+}
+
+/// Flags the particles inside a boundary zone as frozen (other flags stay); their velocity is the zone's.
+template <int D, bool E, class... Terms>
+void mark_zone_members(const std::tuple<Terms...>& terms, ParticleSet<D, E>& p) {
+  auto mark = [&](const auto& t) {
+    if constexpr (BoundaryZone<std::decay_t<decltype(t)>, D>)
+      for (std::size_t a = 0; a < p.n_real; ++a)
+        if (t.contains(p.x[a])) {
+          p.frozen[a] = 1;
+          Vec<D> x = p.x[a];
+          t.advance(x, p.v[a], 0.0);
+        }
+  };
+  std::apply([&](const auto&... term) { (mark(term), ...); }, terms);
+}
 
 }  // namespace rsph::boundary

@@ -4,6 +4,8 @@
 #include "rsph/core/particle_set.hpp"
 
 #include <cmath>
+#include <cstddef>
+#include <cstdint>
 
 namespace rsph::boundary {
 
@@ -59,6 +61,26 @@ void refresh_ghosts(ParticleSet<D, E>& p) {
     p.h[g] = p.h[s];
     if constexpr (E) p.u[g] = p.u[s];
   }
+}
+
+/// The axes that ghost g (an index past n_real) mirrors at a reflecting wall, as bits (bit k: axis k).
+/// A mirrored vector field flips those components, a mirrored tensor S becomes M S M, M = diag(+-1).
+template <int D, bool E>
+std::uint8_t mirror_flips(const ParticleSet<D, E>& p, const Box<D>& box, std::size_t g) {
+  const std::size_t src = p.ghost_source[g - p.n_real];
+  std::uint8_t flips = 0;
+  for (int k = 0; k < D; ++k)
+    if (box.edge[k] == Edge::reflecting && p.x[g][k] != p.x[src][k]) flips |= std::uint8_t(1u << k);
+  return flips;
+}
+
+/// M = diag(+-1) of a mirror: -1 on the axes of `flips` (mirror_flips), +1 on the others.
+template <int D>
+Vec<D> mirror_signs(std::uint8_t flips) {
+  Vec<D> sign = Vec<D>::Ones();
+  for (int k = 0; k < D; ++k)
+    if (flips & (1u << k)) sign[k] = -1.0;
+  return sign;
 }
 
 }  // namespace rsph::boundary

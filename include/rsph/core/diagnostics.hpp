@@ -1,6 +1,7 @@
 #pragma once
-// Conserved totals over the real particles.
+// Conserved totals over the real particles, and the checks of their fields at the start and during a run.
 #include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
 #include "rsph/core/particle_set.hpp"
 
 #include <cmath>
@@ -45,6 +46,31 @@ std::pair<std::size_t, std::string> first_unphysical(const ParticleSet<D, E>& p)
       if (!std::isfinite(p.u[a]) || p.u[a] < 0.0) return {a, "internal energy is negative or not finite"};
   }
   return {std::numeric_limits<std::size_t>::max(), ""};
+}
+
+/// Initial data a run can start from: particles, no ghosts, a non-empty box, and for every particle a
+/// positive finite m and h, finite x and v, u >= 0, x inside the box on each closed axis, and rho > 0 when
+/// the density is evolved from its initial value (need_rho). Throws InputError naming the particle.
+template <int D, bool E>
+void validate_initial_particles(const ParticleSet<D, E>& p, const Box<D>& box, bool need_rho) {
+  require(p.n_real > 0, "the domain holds no particles");
+  require(p.n_real == p.size(), "initial particle sets must not contain ghosts");
+  for (int k = 0; k < D; ++k)
+    require(box.hi[k] > box.lo[k], "the box is empty along axis " + std::to_string(k) + " (hi <= lo)");
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const std::string who = "particle " + std::to_string(a) + ": ";
+    require(p.m[a] > 0.0 && std::isfinite(p.m[a]), who + "mass must be positive and finite");
+    require(p.h[a] > 0.0 && std::isfinite(p.h[a]), who + "smoothing length h must be positive and finite");
+    require(p.x[a].allFinite() && p.v[a].allFinite(), who + "position and velocity must be finite");
+    if constexpr (E) require(p.u[a] >= 0.0 && std::isfinite(p.u[a]), who + "internal energy must be non-negative");
+    if (need_rho)
+      require(p.rho[a] > 0.0 && std::isfinite(p.rho[a]),
+              who + "consistent gradients evolve the density from its initial value: give rho > 0 (m / V)");
+    for (int k = 0; k < D; ++k)
+      if (box.edge[k] != Edge::open)
+        require(p.x[a][k] >= box.lo[k] && p.x[a][k] <= box.hi[k],
+                who + "lies outside the box along axis " + std::to_string(k));
+  }
 }
 
 }  // namespace rsph

@@ -654,4 +654,28 @@ std::vector<double> cell_areas(Builder& builder, const std::vector<Point>& x, co
   return areas;
 }
 
+namespace detail {
+/// A visitor of the builders' protocol, for the concept below.
+struct CellProbe {
+  void operator()(int, std::size_t, const ConvexPolygon&) {}
+  void restart() {}
+};
+}  // namespace detail
+
+/// A Voronoi cell builder: build(x, box, closing_radius, visit) hands visit(thread, a, cell) the cell of
+/// each particle (relative to x[a]), closed against the box's walls and open edges.
+template <class B>
+concept CellBuilder = requires(B& b, const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& r,
+                               detail::CellProbe visit) {
+  b.build(x, box, r, visit);
+};
+
+template <class B>
+constexpr bool check_cell_builder() {
+  static_assert(CellBuilder<B>,
+                "a Voronoi cell builder needs `void build(const std::vector<Point>& x, const Box<2>& box, const "
+                "std::vector<double>& closing_radius, Visitor&& visit)` calling visit(thread, a, cell) per particle");
+  return true;
+}
+
 }  // namespace rsph::geometry

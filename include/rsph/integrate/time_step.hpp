@@ -31,6 +31,16 @@ struct TimeStepParams {
   }
 };
 
+/// A step that is no step at all (nothing constrains it) is an input error; one at or below dt_min means
+/// the run has gone bad. `time` names the moment.
+inline void check_time_step(double dt, const TimeStepParams& params, double time) {
+  if (!std::isfinite(dt))
+    throw InputError("no time-step constraint: nothing moves or exerts force; set TimeStepParams::dt_max");
+  if (!(dt > params.dt_min))
+    throw NumericalError("time step " + std::to_string(dt) + " fell below the minimum " +
+                         std::to_string(params.dt_min) + " at t = " + std::to_string(time));
+}
+
 /// The Courant and force conditions of particle a, capped by dt_max.
 template <int D, bool E>
 double particle_time_step(const ParticleSet<D, E>& p, const std::vector<double>& v_sig, const TimeStepParams& params,

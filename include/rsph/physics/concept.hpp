@@ -4,6 +4,7 @@
 #include "rsph/core/dimension.hpp"
 #include "rsph/physics/pair.hpp"
 
+#include <array>
 #include <concepts>
 #include <cstddef>
 
@@ -72,6 +73,14 @@ concept GradientCorrection = requires(const T& t) {
 template <class T, int D>
 concept Term = PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> ||
     PrescribedMotion<T, D> || BoundaryZone<T, D> || GradientCorrection<T>;
+
+/// Position in a pack of the first type of a kind (the kinds a simulation takes at most one of); 0 if none.
+template <std::size_t N>
+constexpr std::size_t first_of_kind(std::array<bool, N> is_kind) {
+  for (std::size_t i = 0; i < N; ++i)
+    if (is_kind[i]) return i;
+  return 0;
+}
 
 template <class T, int D>
 constexpr bool check_term() {

@@ -6,7 +6,7 @@
 
 #include <concepts>
 #include <cstdint>
-#include <vector>
+#include <span>
 
 namespace rsph {
 
@@ -17,20 +17,21 @@ struct StepInfo {
   std::uint64_t steps_since_last = 0;  ///< steps since the last regularization (or the start)
   double time_since_last = 0.0;
   const neighbors::NeighborList* neighbors = nullptr;  ///< current neighbour lists of the real particles
-  /// n_a = sum_{b != a} W_ab (eq. A1 of the paper) from the density pass, when the regularizer asks for it
-  /// (`static constexpr bool wants_number_density`) and h is fixed; null otherwise.
-  const std::vector<double>* number_density = nullptr;
-  /// W_ab of each entry of `neighbors` as the density pass summed it, given with number_density; so a
-  /// schedule's pair sums over the same kernel values need no distances of their own.
-  const std::vector<double>* pair_kernel = nullptr;
+  /// n_a = sum_{b != a} W_ab (eq. A1 of the paper) per real particle from the density pass, when the
+  /// regularizer asks for it (`static constexpr bool wants_number_density`) and h is fixed; empty otherwise.
+  std::span<const double> number_density;
+  /// W_ab of each entry of `neighbors` as the density pass summed it, given with number_density (empty
+  /// when that pass covered only some particles); so a schedule's pair sums need no distances of their own.
+  std::span<const double> pair_kernel;
 };
 
 /// A regularizer decides when (`due`) and remaps the particles onto a new set (`remap`) conserving
-/// mass, momentum and total energy. `remap` returns the kinetic energy it removed.
+/// mass, momentum and total energy. `remap` is handed the step it acts after and returns the kinetic
+/// energy it removed.
 template <class R, int D, bool E>
 concept Regularizer = requires(R& r, ParticleSet<D, E>& p, const Box<D>& box, const StepInfo& s) {
   { r.due(p, box, s) } -> std::same_as<bool>;
-  { r.remap(p, box) } -> std::convertible_to<double>;
+  { r.remap(p, box, s) } -> std::convertible_to<double>;
 };
 
 template <class R, int D, bool E>
@@ -41,11 +42,26 @@ constexpr bool check_regularizer() {
       },
       "a regularizer needs `bool due(const ParticleSet<D, E>&, const Box<D>&, const StepInfo&)`: when to remap");
   static_assert(
-      requires(R & r, ParticleSet<D, E> & p, const Box<D>& box) {
-        { r.remap(p, box) } -> std::convertible_to<double>;
+      requires(R & r, ParticleSet<D, E> & p, const Box<D>& box, const StepInfo& s) {
+        { r.remap(p, box, s) } -> std::convertible_to<double>;
       },
-      "a regularizer needs `double remap(ParticleSet<D, E>&, const Box<D>&)`: the remap, returning the kinetic energy "
-      "removed");
+      "a regularizer needs `double remap(ParticleSet<D, E>&, const Box<D>&, const StepInfo&)`: the remap after "
+      "that step, returning the kinetic energy removed");
+  return true;
+}
+
+/// When a lattice regularizer remaps: `due` after each step (or block of steps); a schedule may also
+/// offer `double time_until_due(const StepInfo&) const`, and the step before is shortened to land on it.
+template <class S, class P, class B>
+concept Schedule = requires(S& s, const P& p, const B& box, const StepInfo& info) {
+  { s.due(p, box, info) } -> std::same_as<bool>;
+};
+
+template <class S, class P, class B>
+constexpr bool check_schedule() {
+  static_assert(Schedule<S, P, B>,
+                "a regularization schedule needs `bool due(const ParticleSet<D, E>&, const Box<D>&, const StepInfo&)`: "
+                "whether to remap after this step");
   return true;
 }
 
@@ -58,7 +74,7 @@ struct None {
     return false;
   }
   template <class P, class B>
-  double remap(P&, const B&) {
+  double remap(P&, const B&, const StepInfo&) {
     return 0.0;
   }
 };

@@ -31,6 +31,37 @@ concept RegularLattice = requires(const L& l, const Box<D>& box, const Vec<D>& l
   { l.periods(box) } -> std::same_as<std::array<std::int64_t, D>>;  ///< cells per periodic axis (0: not periodic)
 };
 
+/// What a LatticeRegularizer takes as its lattice: a dimension and a spacing Delta, and either the sites
+/// and cells of one level (RegularLattice) or levels in factors of two (`finest()`, lattice::MultiLevel).
+template <class L>
+concept RegularizationLattice = requires(const L& l) {
+  { L::dim } -> std::convertible_to<int>;
+  { l.spacing } -> std::convertible_to<double>;
+}
+&&(RegularLattice<L, L::dim> || requires(const L& l) { l.finest(); });
+
+template <class L>
+constexpr bool check_lattice() {
+  static_assert(
+      requires {
+        { L::dim } -> std::convertible_to<int>;
+      },
+      "a regularization lattice needs `static constexpr int dim`");
+  static_assert(
+      requires(const L& l) {
+        { l.spacing } -> std::convertible_to<double>;
+      },
+      "a regularization lattice needs a spacing `double spacing` (Delta)");
+  if constexpr (requires {
+                  { L::dim } -> std::convertible_to<int>;
+                })
+    static_assert(
+        RegularLattice<L, L::dim> || requires(const L& l) { l.finest(); },
+        "a regularization lattice needs `cell_volume()`, `cells_touching(box, lo, hi)`, `site(box, index)` "
+        "and `periods(box)` (one level), or `finest()` (levels in factors of two, lattice::MultiLevel)");
+  return true;
+}
+
 namespace lattice {
 
 namespace detail {

@@ -24,6 +24,10 @@ struct Record {
 
 template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi, class Region = region::Unbounded>
 class LatticeRegularizer {
+  static_assert(check_lattice<Lattice>());
+  static_assert(geometry::check_cell_builder<Builder>());
+  static_assert(check_closing_region<Region>());
+
  public:
   /// The driver hands the schedule n_a of eq. (A1) from its density pass (StepInfo::number_density).
   static constexpr bool wants_number_density = requires { requires Schedule::wants_number_density; };
@@ -45,7 +49,7 @@ class LatticeRegularizer {
 
   template <class P, class B>
   bool due(const P& p, const B& box, const StepInfo& s) {
-    last_ = s;
+    static_assert(check_schedule<Schedule, P, B>());
     return schedule_.due(p, box, s);
   }
 
@@ -54,11 +58,11 @@ class LatticeRegularizer {
   { return schedule_.time_until_due(s); }
 
   template <int D, bool E>
-  double remap(ParticleSet<D, E>& p, const Box<D>& box) {
+  double remap(ParticleSet<D, E>& p, const Box<D>& box, const StepInfo& s) {
     const auto t0 = std::chrono::steady_clock::now();
     Record r;
-    r.step = last_.step;
-    r.time = last_.time;
+    r.step = s.step;
+    r.time = s.time;
     r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_, region_, &workspace_);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     log_.push_back(r);
@@ -77,7 +81,6 @@ class LatticeRegularizer {
   Builder builder_;
   Region region_;
   RemapWorkspace<Lattice::dim> workspace_;
-  StepInfo last_;
   std::vector<Record> log_;
 };
 

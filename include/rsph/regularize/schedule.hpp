@@ -94,9 +94,9 @@ struct Adaptive {
     if (!s.neighbors) return false;
     const auto& nl = *s.neighbors;
     auto& N = N_;
-    if (s.number_density) {  // eq. (A1) summed by the driver's density pass
+    if (!s.number_density.empty()) {  // eq. (A1) summed by the driver's density pass
       N.resize(p.n_real);
-      const auto& n_a = *s.number_density;
+      const auto n_a = s.number_density;
 #pragma omp parallel for schedule(static)
       for (std::size_t a = 0; a < p.n_real; ++a) N[a] = interaction_volume(p.h[a]) * n_a[a];
     } else {
@@ -114,8 +114,8 @@ struct Adaptive {
       if (N[a] > N_max) return 2;
       // eq. (A4): <N>_a = sum_b m_b / rho_b N_b W_ab, the particle itself included
       double mean = p.m[a] / p.rho[a] * N[a] * kernel::W<Kernel, D>(0.0, p.h[a]);
-      if (s.pair_kernel) {
-        const auto& W = *s.pair_kernel;
+      if (!s.pair_kernel.empty()) {
+        const auto W = s.pair_kernel;
         for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) mean += volume_N[nl.index[k]] * W[k];
       } else {
         const double h_a = p.h[a], inv_h_a = 1.0 / h_a;

@@ -1,0 +1,58 @@
+#pragma once
+// The velocity-gradient pass of a viscous stress term: each particle's S / rho^2 from its velocity
+// gradient (physics/shear_viscosity.hpp), ghosts mirrored; the force pass then sums eq. (3)'s stress part.
+#include "rsph/boundary/ghosts.hpp"
+#include "rsph/kernel/kernel.hpp"
+#include "rsph/neighbors/neighbor_list.hpp"
+#include "rsph/physics/shear_viscosity.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace rsph::physics::loops {
+
+/// nabla_a W of a pair as the force sum uses it: at h_ab, or the mean of both h in grad-h SPH.
+template <class S>
+[[gnu::always_inline]] inline Vec<S::dim> pair_grad_W(const Vec<S::dim>& r_ab, double r, double h_a, double inv_h_a,
+                                                      double h_b) {
+  using Kernel = typename S::Kernel;
+  constexpr int D = S::dim;
+  if constexpr (S::grad_h)
+    return 0.5 * (kernel::grad_W_inv_h<Kernel, D>(r_ab, r, inv_h_a) + kernel::grad_W<Kernel, D>(r_ab, r, h_b));
+  else
+    return kernel::grad_W_inv_h<Kernel, D>(r_ab, r, kernel::inv_h_ab(h_a, inv_h_a, h_b));
+}
+
+/// S / rho^2 of every point (real and ghosts) from `term`'s stress of the velocity gradient, over current
+/// neighbour lists and densities; a mirror ghost sees the stress reflected, S' = M S M.
+template <class S, class P, class Term>
+void stress_over_rho2(const P& p, const Box<S::dim>& box, const neighbors::NeighborList& nl, const Term& term,
+                      std::vector<Mat<S::dim>>& S_over_rho2) {
+  constexpr int D = S::dim;
+  const std::size_t n = p.n_real;
+  S_over_rho2.resize(p.size());
+#pragma omp parallel for schedule(static)
+  for (std::size_t a = 0; a < n; ++a) {
+    Mat<D> G = Mat<D>::Zero();
+    const double h_a = p.h[a], inv_h_a = 1.0 / h_a;
+    for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
+      const std::uint32_t b = nl.index[k];
+      const Vec<D> r_ab = p.x[a] - p.x[b];
+      const double r = r_ab.norm();
+      if (r <= 0.0) continue;
+      if constexpr (S::grad_h)
+        if (r >= S::Kernel::support * std::max(h_a, p.h[b])) continue;
+      G += physics::velocity_gradient_term<D>(p.m[b], p.rho[b], p.v[a] - p.v[b],
+                                              pair_grad_W<S>(r_ab, r, h_a, inv_h_a, p.h[b]));
+    }
+    const double rho = p.rho[a];
+    S_over_rho2[a] = term.stress(G, rho) / (rho * rho);
+  }
+  for (std::size_t g = n; g < p.size(); ++g) {
+    const Vec<D> sign = boundary::mirror_signs<D>(boundary::mirror_flips(p, box, g));
+    S_over_rho2[g] = sign.asDiagonal() * S_over_rho2[p.ghost_source[g - n]] * sign.asDiagonal();
+  }
+}
+
+}  // namespace rsph::physics::loops
