@@ -24,7 +24,7 @@ void write_maps(const std::filesystem::path& dir, const P& p, const scenes::Plan
                 std::size_t n_r, std::size_t n_phi) {
   using K = kernel::CubicSpline;
   const double phi_p = s.star_planet().planet_phase(time);
-  const analysis::PolarGrid grid{s.r_in, s.r_out, phi_p, n_r, n_phi};
+  const paper::PolarGrid grid{s.r_in, s.r_out, phi_p, n_r, n_phi};
   const auto sigma = analysis::interpolate_density<K>(p, grid.points());
   io::CsvWriter map(dir / "map.csv", {"r", "phi", "sigma_over_sigma0"});
   for (std::size_t i = 0; i < n_r; ++i)
@@ -61,7 +61,7 @@ void write_maps(const std::filesystem::path& dir, const P& p, const scenes::Plan
   io::CsvWriter wake(dir / "wake.csv", {"r", "phi"});
   for (std::size_t i = 0; i < n_cut; ++i) {
     const double r = radial[i].norm();
-    const double phi = analysis::wake_azimuth(r, 1.0, s.aspect);
+    const double phi = paper::wake_azimuth(r, 1.0, s.aspect);
     wake.row({r, std::remainder(phi, 2.0 * std::numbers::pi)});  // wrapped into [-pi, pi]
   }
   wake.close();

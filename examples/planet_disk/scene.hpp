@@ -5,9 +5,9 @@
 // fixed circular orbits. RSPH without artificial viscosity (h/Delta = 1.4, Appendix A's adaptive
 // regularization) or equal-mass grad-h SPH with artificial viscosity, on the same initial lattice.
 #include "common/run_helpers.hpp"
-#include "rsph/analysis/disk.hpp"
-#include "rsph/boundary/keplerian_zones.hpp"
-#include "rsph/physics/star_planet.hpp"
+#include "rsph/paper/disk.hpp"
+#include "rsph/paper/keplerian_zones.hpp"
+#include "rsph/paper/star_planet.hpp"
 #include "rsph/rsph.hpp"
 
 #include <cmath>
@@ -72,12 +72,12 @@ struct PlanetDiskParams {
     return std::sqrt(area() / particles / (lattice == "hexagonal" ? std::numbers::sqrt3 / 2.0 : 1.0));
   }
   double h() const { return h_over_dx * spacing(); }
-  physics::StarAndPlanet star_planet() const { return {1.0, q, 1.0, softening, ramp_orbits}; }
+  paper::StarAndPlanet star_planet() const { return {1.0, q, 1.0, softening, ramp_orbits}; }
   double period() const { return star_planet().period(); }
   /// Pressure support: v_phi^2 = v_K^2 (1 - aspect^2 / Gamma) for Sigma uniform and P ~ Sigma / r, with
   /// Gamma = 1 for the isothermal and gamma for the polytropic disk (whose P starts at c_s^2 Sigma / gamma).
   double v_factor() const { return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0)); }
-  boundary::KeplerianZones zones() const { return {1.0, r_in + zone_width, r_out - zone_width, v_factor()}; }
+  paper::KeplerianZones zones() const { return {1.0, r_in + zone_width, r_out - zone_width, v_factor()}; }
   Box<2> box() const {
     Box<2> b;
     b.lo = Vec<2>(-r_out - 1.0, -r_out - 1.0);
@@ -149,9 +149,9 @@ struct DiskProfile {
 template <class P>
 DiskProfile disk_profile(const P& p, const PlanetDiskParams& s) {
   const auto n_r = static_cast<std::size_t>(std::ceil((s.r_out - s.r_in) / s.bin_width - 1e-9));
-  const analysis::PolarGrid grid{s.r_in, s.r_out, 0.0, n_r, 256};
+  const paper::PolarGrid grid{s.r_in, s.r_out, 0.0, n_r, 256};
   const auto mean =
-      analysis::azimuthal_average(grid, analysis::interpolate_density<kernel::CubicSpline>(p, grid.points()));
+      paper::azimuthal_average(grid, analysis::interpolate_density<kernel::CubicSpline>(p, grid.points()));
   DiskProfile out;
   out.gap_depth = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < n_r; ++i) {
@@ -235,12 +235,12 @@ auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& r
     const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
     Reg reg(lat, schedule::Adaptive<K, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)}, remap,
             {}, region::Annulus{s.r_in, s.r_out});
-    Simulation<2, K, EOS, Reg, physics::StarAndPlanet, boundary::KeplerianZones> sim(
+    Simulation<2, K, EOS, Reg, paper::StarAndPlanet, paper::KeplerianZones> sim(
         disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg), ts, gravity, zones);
     return run(sim);
   } else {
-    Simulation<2, K, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity, physics::StarAndPlanet,
-               boundary::KeplerianZones>
+    Simulation<2, K, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity, paper::StarAndPlanet,
+               paper::KeplerianZones>
         sim(disk_particles_on(s, lat), s.box(), std::move(eos), {}, ts, physics::GradH<2>{s.h_over_dx},
             physics::ArtificialViscosity{s.alpha, s.beta}, gravity, zones);
     return run(sim);

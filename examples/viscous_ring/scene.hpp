@@ -5,6 +5,7 @@
 // from eqs. (17)-(18); snapshots at the paper's tau*, each fitted by eq. (16) for an effective
 // viscous time and so an effective viscosity nu_eff.
 #include "common/run_helpers.hpp"
+#include "rsph/paper/viscous_ring.hpp"
 #include "rsph/rsph.hpp"
 
 #include <algorithm>
@@ -51,7 +52,7 @@ struct ViscousRingParams {
             "viscous ring: individual time steps need a pair viscosity (mg), not the stress tensor (ns)");
   }
   double spacing() const { return h / h_over_dx; }
-  analysis::ViscousRing ring() const { return {M, 1.0, 1.0, nu}; }
+  paper::ViscousRing ring() const { return {M, 1.0, 1.0, nu}; }
   double time_of(double tau) const { return ring().time_at(tau, tau0); }
   /// Open in both axes; its corner fixes the lattice origin.
   Box<2> box() const {
@@ -147,7 +148,7 @@ inline RingSnapshot measure_ring(const ViscousRingParams& s, double tau, double 
   snap.tau = tau;
   snap.time = time;
   const auto ring = s.ring();
-  snap.tau_fit = analysis::fit_viscous_time(ring, profile.x, profile.mean, s.tau0 * 1.0001, 20.0 * tau);
+  snap.tau_fit = paper::fit_viscous_time(ring, profile.x, profile.mean, s.tau0 * 1.0001, 20.0 * tau);
   snap.nu_eff = (snap.tau_fit - s.tau0) / (12.0 * time);
   const double peak = ring.peak_sigma(tau);
   double noise = 0.0;

@@ -1,4 +1,4 @@
-#include "rsph/analysis/viscous_ring.hpp"
+#include "rsph/paper/viscous_ring.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -11,19 +11,19 @@ using namespace rsph;
 TEST_CASE("scaled Bessel I_1/4: the series and the asymptotic branch agree and match known values", "[analysis]") {
   // both branches at the switch point
   const double z = 25.0;
-  CHECK(analysis::scaled_bessel_i(0.25, z) == Approx(std::cyl_bessel_i(0.25, z) * std::exp(-z)).epsilon(1e-13));
-  CHECK(analysis::scaled_bessel_i(0.25, 40.0) ==
+  CHECK(paper::scaled_bessel_i(0.25, z) == Approx(std::cyl_bessel_i(0.25, z) * std::exp(-z)).epsilon(1e-13));
+  CHECK(paper::scaled_bessel_i(0.25, 40.0) ==
         Approx(std::cyl_bessel_i(0.25, 40.0) * std::exp(-40.0)).epsilon(1e-13));
   // I_1/2(z) = sqrt(2 / (pi z)) sinh z, exactly
   for (double x : {0.5, 10.0, 30.0, 300.0})
-    CHECK(analysis::scaled_bessel_i(0.5, x) ==
+    CHECK(paper::scaled_bessel_i(0.5, x) ==
           Approx(std::sqrt(2.0 / (std::numbers::pi * x)) * 0.5 * (1.0 - std::exp(-2.0 * x))).epsilon(1e-13));
   // far beyond where I_1/4 overflows
-  CHECK(std::isfinite(analysis::scaled_bessel_i(0.25, 1e4)));
+  CHECK(std::isfinite(paper::scaled_bessel_i(0.25, 1e4)));
 }
 
 TEST_CASE("eq. (16) holds the ring's mass and solves the viscous diffusion equation", "[analysis]") {
-  const analysis::ViscousRing ring{2.5, 1.0, 1.0, 4.8e-5};
+  const paper::ViscousRing ring{2.5, 1.0, 1.0, 4.8e-5};
   auto disk_mass = [&](double tau) {  // int Sigma 2 pi R dR, midpoint rule
     double mass = 0.0;
     const double dR = 1e-4;
@@ -55,7 +55,7 @@ TEST_CASE("eq. (16) holds the ring's mass and solves the viscous diffusion equat
 }
 
 TEST_CASE("the chi^2 fit recovers the viscous time of a noisy profile", "[analysis]") {
-  const analysis::ViscousRing ring{1.0, 1.0, 1.0, 4.8e-5};
+  const paper::ViscousRing ring{1.0, 1.0, 1.0, 4.8e-5};
   std::mt19937 rng(3);
   std::normal_distribution<double> noise(0.0, 0.02);
   std::vector<double> x, s;
@@ -63,5 +63,5 @@ TEST_CASE("the chi^2 fit recovers the viscous time of a noisy profile", "[analys
     x.push_back(r);
     s.push_back(ring.sigma(0.126, r) * (1.0 + noise(rng)));
   }
-  CHECK(analysis::fit_viscous_time(ring, x, s, 0.018, 1.0) == Approx(0.126).epsilon(0.01));
+  CHECK(paper::fit_viscous_time(ring, x, s, 0.018, 1.0) == Approx(0.126).epsilon(0.01));
 }

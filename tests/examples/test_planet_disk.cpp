@@ -8,7 +8,7 @@
 using namespace rsph;
 
 TEST_CASE("star and planet: centre of mass at rest, eq. (20) ramp, softened planet", "[examples][disk]") {
-  const physics::StarAndPlanet sp{1.0, 1e-3, 1.0, 0.03, 5.0};
+  const paper::StarAndPlanet sp{1.0, 1e-3, 1.0, 0.03, 5.0};
   const double M_p = sp.planet_mass();
   CHECK(M_p / (1.0 + M_p) == Approx(1e-3).epsilon(1e-14));
   CHECK(sp.period() == Approx(2.0 * std::numbers::pi / std::sqrt(1.0 + M_p)).epsilon(1e-14));
@@ -34,7 +34,7 @@ TEST_CASE("star and planet: centre of mass at rest, eq. (20) ramp, softened plan
 }
 
 TEST_CASE("Keplerian zones turn their members exactly and leave the disk between them alone", "[examples][disk]") {
-  const boundary::KeplerianZones z{1.0, 0.5, 2.4, 0.99};
+  const paper::KeplerianZones z{1.0, 0.5, 2.4, 0.99};
   CHECK(z.contains(Vec<2>(0.45, 0.0)));
   CHECK(z.contains(Vec<2>(0.0, 2.45)));
   CHECK(!z.contains(Vec<2>(1.0, 0.0)));
@@ -49,15 +49,15 @@ TEST_CASE("Keplerian zones turn their members exactly and leave the disk between
 }
 
 TEST_CASE("the wake of linear theory trails outside the orbit and leads inside", "[examples][disk][analysis]") {
-  CHECK(analysis::wake_azimuth(1.0, 1.0, 0.05) == 0.0);
-  CHECK(analysis::wake_azimuth(2.0, 1.0, 0.05) ==
+  CHECK(paper::wake_azimuth(1.0, 1.0, 0.05) == 0.0);
+  CHECK(paper::wake_azimuth(2.0, 1.0, 0.05) ==
         Approx((std::log(2.0) - 2.0 / 3.0 * (std::pow(2.0, 1.5) - 1.0)) / 0.05));
-  CHECK(analysis::wake_azimuth(2.0, 1.0, 0.05) < -10.0);
-  CHECK(analysis::wake_azimuth(0.5, 1.0, 0.05) > 5.0);
+  CHECK(paper::wake_azimuth(2.0, 1.0, 0.05) < -10.0);
+  CHECK(paper::wake_azimuth(0.5, 1.0, 0.05) > 5.0);
   // dphi/dr = sgn(r - a) (Omega - Omega_p) / c_s
   for (double r : {0.6, 1.5, 2.2}) {
     const double slope =
-        (analysis::wake_azimuth(r + 1e-6, 1.0, 0.05) - analysis::wake_azimuth(r - 1e-6, 1.0, 0.05)) / 2e-6;
+        (paper::wake_azimuth(r + 1e-6, 1.0, 0.05) - paper::wake_azimuth(r - 1e-6, 1.0, 0.05)) / 2e-6;
     const double expect = (r > 1.0 ? 1.0 : -1.0) * (std::pow(r, -1.5) - 1.0) / (0.05 / std::sqrt(r));
     CHECK(slope == Approx(expect).epsilon(1e-6));
   }

@@ -8,7 +8,7 @@
 #include <numbers>
 #include <string>
 
-namespace rsph::physics {
+namespace rsph::paper {
 
 struct StarAndPlanet {
   double M_star = 1.0;
@@ -65,4 +65,4 @@ struct StarAndPlanet {
   Vec<2> acceleration(const Vec<2>& x, double t) const { return at(t).acceleration(x); }
 };
 
-}  // namespace rsph::physics
+}  // namespace rsph::paper

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace rsph::analysis {
+namespace rsph::paper {
 
 /// e^-z I_nu(z), the exponentially scaled modified Bessel function of the first kind: I_nu itself
 /// overflows for z > 700, and eq. (16) reaches z = 2x / tau* ~ 100 already at tau* = 0.018.
@@ -124,4 +124,4 @@ inline double fit_viscous_time(const ViscousRing& ring, const std::vector<double
   return 0.5 * (a + b);
 }
 
-}  // namespace rsph::analysis
+}  // namespace rsph::paper

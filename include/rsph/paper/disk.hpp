@@ -9,7 +9,7 @@
 #include <numbers>
 #include <vector>
 
-namespace rsph::analysis {
+namespace rsph::paper {
 
 /// A polar grid of n_r x n_phi cell centres over [r_lo, r_hi] x [phi_0 - pi, phi_0 + pi), row-major in r.
 struct PolarGrid {
@@ -54,4 +54,4 @@ inline double wake_azimuth(double r, double a, double aspect) {
   return s / aspect * (std::log(x) - 2.0 / 3.0 * (x * std::sqrt(x) - 1.0));
 }
 
-}  // namespace rsph::analysis
+}  // namespace rsph::paper

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <string>
 
-namespace rsph::boundary {
+namespace rsph::paper {
 
 struct KeplerianZones {
   double GM = 1.0;
@@ -43,4 +43,4 @@ struct KeplerianZones {
   }
 };
 
-}  // namespace rsph::boundary
+}  // namespace rsph::paper
