@@ -14,6 +14,7 @@
 #include <map>
 #include <numeric>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace rsph {
@@ -138,324 +139,58 @@ double distance_to_coarser_block(const refine::BlockField<D>& field, const std::
   return best;
 }
 
-/// New cells at level faces (2D). Old cells are Voronoi cells; the new cell of a site whose one-cell ring
-/// holds a cell of another level is taken as its Voronoi cell among the new sites too (as Fig. 1 of the
-/// paper draws both), not its lattice square, so that a set on the lattice remaps onto itself and a
-/// uniform state stays uniform. Elsewhere the two coincide. The face cells tile the same region F as
-/// their lattice squares (a union of finest cells); each old cell's share of F from the finest-cell pass
-/// is handed to the face cells in proportion to its exact overlaps with their Voronoi cells, so the remap
-/// stays exactly conservative. Replaces the face cells' sums in `cells` and their volumes in `volume`.
-template <class Builder, bool E, class Region>
-void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const lattice::Square& fine, Builder& builder,
-                      const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& ws,
-                      const std::vector<std::uint32_t>& owner,
-                      const std::vector<std::array<std::int64_t, 2>>& first_fine, const std::vector<std::int64_t>& span,
-                      const Vec<2>& origin, Sums<2>& cells, std::vector<double>& volume) {
-  using geometry::ConvexPolygon;
-  const double dx = fine.spacing;
-  const std::size_t n_cells = span.size();
-  auto owner_at = [&](std::int64_t i, std::int64_t j) -> std::int64_t {  // grid-relative finest index
-    const std::int64_t fl = grid.flat({grid.range.lo[0] + i, grid.range.lo[1] + j});
-    return fl < 0 ? -1 : static_cast<std::int64_t>(owner[static_cast<std::size_t>(fl)]);
-  };
-  auto site = [&](std::size_t c) {
-    return Vec<2>(origin[0] + (static_cast<double>(first_fine[c][0]) + 0.5 * static_cast<double>(span[c])) * dx,
-                  origin[1] + (static_cast<double>(first_fine[c][1]) + 0.5 * static_cast<double>(span[c])) * dx);
-  };
-  // Face cells: another level in the ring of finest cells around the footprint.
-  std::vector<std::int32_t> face_of(n_cells, -1);
-  std::vector<std::size_t> faces;
-  for (std::size_t c = 0; c < n_cells; ++c) {
-    const std::int64_t s = span[c], i0 = first_fine[c][0], j0 = first_fine[c][1];
-    bool face = false;
-    for (std::int64_t i = -1; i <= s && !face; ++i)
-      for (std::int64_t j = -1; j <= s && !face; ++j) {
-        if (i >= 0 && i < s && j >= 0 && j < s) continue;
-        const std::int64_t o = owner_at(i0 + i, j0 + j);
-        face = o >= 0 && span[static_cast<std::size_t>(o)] != s;
-      }
-    if (face) {
-      face_of[c] = static_cast<std::int32_t>(faces.size());
-      faces.push_back(c);
-    }
+/// The new cells of every block at its level, in block order and lattice order within a block: each
+/// cell's footprint on the finest grid (its lowest finest index, grid-relative, and its span in finest
+/// cells per axis), its level, and per finest cell its owner.
+template <int D>
+struct Footprint {
+  std::vector<std::uint32_t> owner;
+  std::vector<std::array<std::int64_t, D>> first_fine;
+  std::vector<std::int64_t> span;
+  std::vector<int> level;
+  Vec<D> origin;  ///< lower corner of the grid
+  double dx = 0;  ///< the finest spacing
+
+  std::size_t size() const { return span.size(); }
+  Vec<D> site(std::size_t c) const {
+    Vec<D> x;
+    for (int k = 0; k < D; ++k)
+      x[k] =
+          origin[k] +
+          (static_cast<double>(first_fine[c][static_cast<std::size_t>(k)]) + 0.5 * static_cast<double>(span[c])) * dx;
+    return x;
   }
-  if (faces.empty()) return;
-  // Their Voronoi cells among the new sites (relative to their own site), and the face
-  // cells near each, which an old cell touching it may also overlap.
-  const std::size_t n_faces = faces.size();
-  std::vector<ConvexPolygon> polygon(n_faces);
-  std::vector<Vec<2>> face_site(n_faces);
-  std::vector<geometry::Bounds> face_bounds(n_faces);  // relative to the site: a quick test before clipping
-  std::vector<std::vector<std::uint32_t>> nearby(n_faces);
-  for (std::size_t k = 0; k < n_faces; ++k) {
-    const std::size_t c = faces[k];
-    const std::int64_t s = span[c], reach = 2 * s, i0 = first_fine[c][0], j0 = first_fine[c][1];
-    const Vec<2> xc = site(c);
-    const double half = 1.5 * static_cast<double>(s) * dx;
-    double lo[2] = {-half, -half}, hi[2] = {half, half};
-    for (int a = 0; a < 2; ++a)
-      if (box.edge[a] == Edge::reflecting) {
-        lo[a] = std::max(lo[a], box.lo[a] - xc[a]);
-        hi[a] = std::min(hi[a], box.hi[a] - xc[a]);
-      }
-    ConvexPolygon buffers[2];
-    ConvexPolygon* cell = &buffers[0];
-    ConvexPolygon* scratch = &buffers[1];
-    *cell = ConvexPolygon::rectangle(lo[0], lo[1], hi[0], hi[1]);
-    std::vector<std::pair<std::int64_t, Vec<2>>> seen;
-    for (std::int64_t i = i0 - reach; i < i0 + s + reach; ++i)
-      for (std::int64_t j = j0 - reach; j < j0 + s + reach; ++j) {
-        const std::int64_t o = owner_at(i, j);
-        if (o < 0 || static_cast<std::size_t>(o) == c) continue;
-        // the neighbour's site, shifted by the periods its finest cell was wrapped across
-        const auto g = grid.unflat(static_cast<std::size_t>(grid.flat({grid.range.lo[0] + i, grid.range.lo[1] + j})));
-        const Vec<2> shift(static_cast<double>(grid.range.lo[0] + i - g[0]) * dx,
-                           static_cast<double>(grid.range.lo[1] + j - g[1]) * dx);
-        const Vec<2> d = site(static_cast<std::size_t>(o)) + shift - xc;
-        bool repeat = false;
-        for (const auto& [q, dq] : seen) repeat = repeat || (q == o && (dq - d).squaredNorm() < 1e-12 * dx * dx);
-        if (repeat) continue;
-        seen.emplace_back(o, d);
-        if (geometry::detail::cut_by_bisector(*cell, d, *scratch)) std::swap(cell, scratch);
-        if (face_of[static_cast<std::size_t>(o)] >= 0)
-          nearby[k].push_back(static_cast<std::uint32_t>(face_of[static_cast<std::size_t>(o)]));
-      }
-    // drop repeated vertices (a cut through a vertex leaves one), which would be edges without a normal
-    ConvexPolygon& out = polygon[k];
-    out.clear();
-    for (int v = 0; v < cell->n; ++v) {
-      const Vec<2>& q = (*cell)[v];
-      if (out.n > 0 && (q - out[out.n - 1]).squaredNorm() <= 1e-24 * dx * dx) continue;
-      out.push(q);
-    }
-    while (out.n > 1 && (out[0] - out[out.n - 1]).squaredNorm() <= 1e-24 * dx * dx) --out.n;
-    face_site[k] = xc;
-    face_bounds[k] = geometry::bounds(out);
-    volume[c] = geometry::area(*cell);
+};
+
+/// Steps a D-dimensional counter through [lo, hi) per axis, axis 0 fastest; false once it has passed them all.
+template <int D>
+bool next_index(std::array<std::int64_t, D>& i, std::int64_t lo, std::int64_t hi) {
+  for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
+    if (++i[k] < hi) return true;
+    i[k] = lo;
   }
-  for (auto& list : nearby) {
-    std::sort(list.begin(), list.end());
-    list.erase(std::unique(list.begin(), list.end()), list.end());
-  }
-  // Each old cell's share of F, handed out by exact overlaps with the face cells.
-  struct FaceSums {
-    std::vector<double> m, energy, fill;
-    std::vector<Vec<2>> mv;
-    void resize(std::size_t n) {
-      m.assign(n, 0.0);
-      energy.assign(n, 0.0);
-      fill.assign(n, 0.0);
-      mv.assign(n, Vec<2>::Zero());
-    }
-  };
-  struct HandOut {
-    const ParticleSet<2, E>* p;
-    const Box<2>* box;
-    const std::vector<std::uint32_t>* owner;
-    const std::vector<std::int32_t>* face_of;
-    const std::vector<ConvexPolygon>* polygon;
-    const std::vector<Vec<2>>* face_site;
-    const std::vector<geometry::Bounds>* face_bounds;
-    const std::vector<std::vector<std::uint32_t>>* nearby;
-    std::vector<FaceSums> sums;
-    std::vector<std::vector<std::uint32_t>> candidates;
-    std::vector<std::vector<double>> omegas;
-    void restart() {
-      for (auto& s : sums) s.resize(s.m.size());
-    }
-    void operator()(int thread, std::size_t a, const ConvexPolygon& cell, std::span<const detail::Overlap> ov,
-                    double V_o, double) {
-      double A_F = 0.0, best = 0.0;
-      std::int32_t best_face = -1;
-      auto& cand = candidates[static_cast<std::size_t>(thread)];
-      cand.clear();
-      for (const auto& [f, omega] : ov) {
-        const std::int32_t k = (*face_of)[(*owner)[f]];
-        if (k < 0) continue;
-        A_F += omega;
-        if (omega > best) {
-          best = omega;
-          best_face = k;
-        }
-        cand.push_back(static_cast<std::uint32_t>(k));
-        for (const std::uint32_t q : (*nearby)[static_cast<std::size_t>(k)]) cand.push_back(q);
-      }
-      if (!(A_F > 0.0)) return;
-      std::sort(cand.begin(), cand.end());
-      cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
-      const Vec<2> xo = p->x[a];
-      auto& om = omegas[static_cast<std::size_t>(thread)];
-      om.assign(cand.size(), 0.0);
-      double A_poly = 0.0;
-      const geometry::Bounds cb = geometry::bounds(cell);
-      for (std::size_t i = 0; i < cand.size(); ++i) {
-        const std::size_t k = cand[i];
-        Vec<2> d = (*face_site)[k] - xo;  // nearest periodic image of the face site
-        for (int ax = 0; ax < 2; ++ax)
-          if (box->edge[ax] == Edge::periodic) {
-            const double L = box->hi[ax] - box->lo[ax];
-            d[ax] -= L * std::round(d[ax] / L);
-          }
-        const geometry::Bounds& wb = (*face_bounds)[k];
-        if (((wb.lo + d).array() > cb.hi.array()).any() || ((wb.hi + d).array() < cb.lo.array()).any())
-          continue;  // apart: no overlap, and no clip needed to say so
-        ConvexPolygon window = (*polygon)[k];
-        for (int v = 0; v < window.n; ++v) window.v[static_cast<std::size_t>(v)] += d;
-        om[i] = geometry::intersection_area(cell, window);
-        A_poly += om[i];
-      }
-      auto& S = sums[static_cast<std::size_t>(thread)];
-      const double density = p->m[a] / V_o;
-      const double specific_energy = [&] {
-        if constexpr (E)
-          return p->u[a] + 0.5 * p->v[a].squaredNorm();
-        else
-          return 0.5 * p->v[a].squaredNorm();
-      }();
-      auto add = [&](std::size_t k, double omega) {
-        const double dm = density * omega;  // eq. (6)
-        S.m[k] += dm;
-        S.mv[k] += dm * p->v[a];
-        S.energy[k] += dm * specific_energy;
-        S.fill[k] += omega;
-      };
-      if (!(A_poly > 0.5 * A_F)) {  // round-off slivers only: to the face cell it overlaps most
-        add(static_cast<std::size_t>(best_face), A_F);
-        return;
-      }
-      const double scale = A_F / A_poly;  // the finest-cell pass's share, so sums stay exact
-      for (std::size_t i = 0; i < cand.size(); ++i)
-        if (om[i] > 0.0) add(cand[i], om[i] * scale);
-    }
-  };
-  const auto n_threads = static_cast<std::size_t>(geometry::builder_threads());
-  HandOut hand_out{&p,
-                   &box,
-                   &owner,
-                   &face_of,
-                   &polygon,
-                   &face_site,
-                   &face_bounds,
-                   &nearby,
-                   std::vector<FaceSums>(n_threads),
-                   std::vector<std::vector<std::uint32_t>>(n_threads),
-                   std::vector<std::vector<double>>(n_threads)};
-  for (auto& s : hand_out.sums) s.resize(n_faces);
-  // Only the old cells that may meet a face cell are built again: those whose disc of reach (from the
-  // overlap pass) touches a finest cell a face cell owns.
-  require(ws.reach.size() == p.n_real, "multi-level remap: the overlap pass did not record the cells' reach");
-  std::vector<std::uint8_t> in_face(grid.n_cells);  // per finest cell: owned by a face cell
-  for (std::size_t f = 0; f < grid.n_cells; ++f) in_face[f] = face_of[owner[f]] >= 0;
-  std::vector<std::uint32_t> near_faces;
-  for (std::size_t a = 0; a < p.n_real; ++a) {
-    const double reach = ws.reach[a];
-    const auto r = fine.cells_touching(box, p.x[a] - Vec<2>::Constant(reach), p.x[a] + Vec<2>::Constant(reach));
-    bool meets = false;
-    for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i)
-      for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j) {
-        const std::int64_t fl = grid.flat({i, j});
-        meets |= fl >= 0 && in_face[static_cast<std::size_t>(fl)];
-      }
-    if (meets) near_faces.push_back(static_cast<std::uint32_t>(a));
-  }
-  if (!near_faces.empty())  // (an empty list would mean every cell)
-    for_each_old_cell(p, box, fine, builder, grid, region, ws, hand_out, near_faces);
-  for (std::size_t k = 0; k < n_faces; ++k) {
-    const std::size_t c = faces[k];
-    cells.m[c] = 0.0;
-    cells.E[c] = 0.0;
-    cells.fill[c] = 0.0;
-    cells.mv[c] = Vec<2>::Zero();
-    for (const auto& s : hand_out.sums) {  // fixed order: independent of scheduling
-      cells.m[c] += s.m[k];
-      cells.E[c] += s.energy[k];
-      cells.fill[c] += s.fill[k];
-      cells.mv[c] += s.mv[k];
-    }
-  }
+  return false;
 }
 
-/// The 1D counterpart of the above: a face cell's new cell is the interval between the midpoints to its
-/// neighbouring sites.
-template <bool E>
-void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const lattice::Uniform1D& fine,
-                      const RemapParams& params, const CellGrid<1>& grid, const std::vector<std::uint32_t>& owner,
-                      const std::vector<std::array<std::int64_t, 1>>& first_fine, const std::vector<std::int64_t>& span,
-                      const Vec<1>& origin, Sums<1>& cells, std::vector<double>& volume) {
-  const double dx = fine.spacing;
-  const std::size_t n_cells = span.size();
-  const double L = box.hi[0] - box.lo[0];
-  auto site = [&](std::size_t c) {
-    return origin[0] + (static_cast<double>(first_fine[c][0]) + 0.5 * static_cast<double>(span[c])) * dx;
-  };
-  // the owner of finest cell i (grid-relative) and the shift of its period; -1 beyond the grid
-  auto owner_at = [&](std::int64_t i, double& shift) -> std::int64_t {
-    const std::int64_t fl = grid.flat({grid.range.lo[0] + i});
-    if (fl < 0) return -1;
-    shift = static_cast<double>(grid.range.lo[0] + i - grid.unflat(static_cast<std::size_t>(fl))[0]) * dx;
-    return static_cast<std::int64_t>(owner[static_cast<std::size_t>(fl)]);
-  };
-  std::vector<std::int32_t> face_of(n_cells, -1);
-  std::vector<std::size_t> faces;
-  for (std::size_t c = 0; c < n_cells; ++c) {
-    double shift = 0.0;
-    const std::int64_t l = owner_at(first_fine[c][0] - 1, shift), r = owner_at(first_fine[c][0] + span[c], shift);
-    if ((l >= 0 && span[static_cast<std::size_t>(l)] != span[c]) ||
-        (r >= 0 && span[static_cast<std::size_t>(r)] != span[c])) {
-      face_of[c] = static_cast<std::int32_t>(faces.size());
-      faces.push_back(c);
-    }
+/// What the face cells receive from the old cells that meet them (one per thread in 2D).
+template <int D>
+struct FaceSums {
+  std::vector<double> m, energy, fill;
+  std::vector<Vec<D>> mv;
+
+  void resize(std::size_t n) {
+    m.assign(n, 0.0);
+    energy.assign(n, 0.0);
+    fill.assign(n, 0.0);
+    mv.assign(n, Vec<D>::Zero());
   }
-  if (faces.empty()) return;
-  const std::size_t n_faces = faces.size();
-  std::vector<double> lo(n_faces), hi(n_faces), face_site(n_faces);
-  std::vector<std::array<std::int32_t, 2>> beside(n_faces);
-  for (std::size_t k = 0; k < n_faces; ++k) {
-    const std::size_t c = faces[k];
-    const double xc = site(c), half = 0.5 * static_cast<double>(span[c]) * dx;
-    double shift = 0.0;
-    const std::int64_t l = owner_at(first_fine[c][0] - 1, shift);
-    lo[k] = l >= 0 ? 0.5 * (site(static_cast<std::size_t>(l)) + shift - xc) : -half;  // a wall or the grid's end
-    beside[k][0] = l >= 0 ? face_of[static_cast<std::size_t>(l)] : -1;
-    const std::int64_t r = owner_at(first_fine[c][0] + span[c], shift);
-    hi[k] = r >= 0 ? 0.5 * (site(static_cast<std::size_t>(r)) + shift - xc) : half;
-    beside[k][1] = r >= 0 ? face_of[static_cast<std::size_t>(r)] : -1;
-    face_site[k] = xc;
-    volume[c] = hi[k] - lo[k];
-  }
-  std::vector<double> m(n_faces, 0.0), energy(n_faces, 0.0), fill(n_faces, 0.0);
-  std::vector<Vec<1>> mv(n_faces, Vec<1>::Zero());
-  std::vector<std::int32_t> cand;
-  std::vector<double> om;
-  auto hand_out = [&](std::size_t a, double left, double right, const auto& ov, double V_o) {
-    double A_F = 0.0, best = 0.0;
-    std::int32_t best_face = -1;
-    cand.clear();
-    for (const auto& [f, omega] : ov) {
-      const std::int32_t k = face_of[owner[f]];
-      if (k < 0) continue;
-      A_F += omega;
-      if (omega > best) {
-        best = omega;
-        best_face = k;
-      }
-      cand.push_back(k);
-      for (const std::int32_t q : beside[static_cast<std::size_t>(k)])
-        if (q >= 0) cand.push_back(q);
-    }
-    if (!(A_F > 0.0)) return;
-    std::sort(cand.begin(), cand.end());
-    cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
-    const double xo = p.x[a][0];
-    om.assign(cand.size(), 0.0);
-    double A_poly = 0.0;
-    for (std::size_t i = 0; i < cand.size(); ++i) {
-      const auto k = static_cast<std::size_t>(cand[i]);
-      double d = face_site[k] - xo;  // nearest periodic image of the face site
-      if (box.edge[0] == Edge::periodic) d -= L * std::round(d / L);
-      om[i] = std::max(0.0, std::min(right, xo + d + hi[k]) - std::max(left, xo + d + lo[k]));
-      A_poly += om[i];
-    }
+
+  /// Old particle a's share A_F of the face region, handed to the candidate face cells `cand` in proportion
+  /// to its exact overlaps `om` with their cells (summing to A_poly), scaled so that the face cells receive
+  /// exactly the share the finest-cell pass gave; round-off slivers only go to best_face whole.
+  template <bool E, class Index>
+  void hand_out(const ParticleSet<D, E>& p, std::size_t a, double V_o, double A_F, double A_poly,
+                std::int32_t best_face, const std::vector<Index>& cand, const std::vector<double>& om) {
     const double density = p.m[a] / V_o;
     const double specific_energy = [&] {
       if constexpr (E)
@@ -477,15 +212,465 @@ void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const latti
     const double scale = A_F / A_poly;  // the finest-cell pass's share, so sums stay exact
     for (std::size_t i = 0; i < cand.size(); ++i)
       if (om[i] > 0.0) add(static_cast<std::size_t>(cand[i]), om[i] * scale);
+  }
+};
+
+/// The face cells an old cell's overlaps on the finest cells fall in, and those near each (near(k, push)):
+/// returns A_F, the old cell's area in face cells; best_face the one it overlaps most; cand the
+/// candidates, sorted and unique.
+template <class Overlaps, class Index, class Near>
+double face_candidates(const Overlaps& ov, const std::vector<std::uint32_t>& owner,
+                       const std::vector<std::int32_t>& face_of, Near&& near, std::vector<Index>& cand,
+                       std::int32_t& best_face) {
+  double A_F = 0.0, best = 0.0;
+  best_face = -1;
+  cand.clear();
+  for (const auto& [f, omega] : ov) {
+    const std::int32_t k = face_of[owner[f]];
+    if (k < 0) continue;
+    A_F += omega;
+    if (omega > best) {
+      best = omega;
+      best_face = k;
+    }
+    cand.push_back(static_cast<Index>(k));
+    near(k, [&](Index q) { cand.push_back(q); });
+  }
+  std::sort(cand.begin(), cand.end());
+  cand.erase(std::unique(cand.begin(), cand.end()), cand.end());
+  return A_F;
+}
+
+/// The face cells: those with another level in the one-cell ring of finest cells around their footprint;
+/// face_of gives each new cell's index among them (-1 for others).
+struct Faces {
+  std::vector<std::int32_t> face_of;
+  std::vector<std::size_t> cells;
+};
+
+template <int D, class OtherLevelBeside>
+Faces find_faces(std::size_t n_cells, OtherLevelBeside&& other_level_beside) {
+  Faces f;
+  f.face_of.assign(n_cells, -1);
+  for (std::size_t c = 0; c < n_cells; ++c)
+    if (other_level_beside(c)) {
+      f.face_of[c] = static_cast<std::int32_t>(f.cells.size());
+      f.cells.push_back(c);
+    }
+  return f;
+}
+
+/// Owner of the grid-relative finest cell (i, j), -1 beyond the grid.
+inline std::int64_t owner_at(const CellGrid<2>& grid, const Footprint<2>& fp, std::int64_t i, std::int64_t j) {
+  const std::int64_t fl = grid.flat({grid.range.lo[0] + i, grid.range.lo[1] + j});
+  return fl < 0 ? -1 : static_cast<std::int64_t>(fp.owner[static_cast<std::size_t>(fl)]);
+}
+
+/// The 2D face cells' Voronoi cells among the new sites (relative to their own site, with bounds for a
+/// quick test before clipping), and the face cells near each, which an old cell touching it may also overlap.
+struct FaceCells2 {
+  std::vector<geometry::ConvexPolygon> polygon;
+  std::vector<Vec<2>> site;
+  std::vector<geometry::Bounds> bounds;
+  std::vector<std::vector<std::uint32_t>> nearby;
+};
+
+/// Face cell k's Voronoi cell among the new sites within two spans, clipped to walls; its volume into volume[c].
+inline void build_face_cell(const Box<2>& box, const CellGrid<2>& grid, const Footprint<2>& fp, const Faces& faces,
+                            std::size_t k, FaceCells2& fc, std::vector<double>& volume) {
+  using geometry::ConvexPolygon;
+  const double dx = fp.dx;
+  const std::size_t c = faces.cells[k];
+  const std::int64_t s = fp.span[c], reach = 2 * s, i0 = fp.first_fine[c][0], j0 = fp.first_fine[c][1];
+  const Vec<2> xc = fp.site(c);
+  const double half = 1.5 * static_cast<double>(s) * dx;
+  double lo[2] = {-half, -half}, hi[2] = {half, half};
+  for (int a = 0; a < 2; ++a)
+    if (box.edge[a] == Edge::reflecting) {
+      lo[a] = std::max(lo[a], box.lo[a] - xc[a]);
+      hi[a] = std::min(hi[a], box.hi[a] - xc[a]);
+    }
+  ConvexPolygon buffers[2];
+  ConvexPolygon* cell = &buffers[0];
+  ConvexPolygon* scratch = &buffers[1];
+  *cell = ConvexPolygon::rectangle(lo[0], lo[1], hi[0], hi[1]);
+  std::vector<std::pair<std::int64_t, Vec<2>>> seen;
+  for (std::int64_t i = i0 - reach; i < i0 + s + reach; ++i)
+    for (std::int64_t j = j0 - reach; j < j0 + s + reach; ++j) {
+      const std::int64_t o = owner_at(grid, fp, i, j);
+      if (o < 0 || static_cast<std::size_t>(o) == c) continue;
+      // the neighbour's site, shifted by the periods its finest cell was wrapped across
+      const auto g = grid.unflat(static_cast<std::size_t>(grid.flat({grid.range.lo[0] + i, grid.range.lo[1] + j})));
+      const Vec<2> shift(static_cast<double>(grid.range.lo[0] + i - g[0]) * dx,
+                         static_cast<double>(grid.range.lo[1] + j - g[1]) * dx);
+      const Vec<2> d = fp.site(static_cast<std::size_t>(o)) + shift - xc;
+      bool repeat = false;
+      for (const auto& [q, dq] : seen) repeat = repeat || (q == o && (dq - d).squaredNorm() < 1e-12 * dx * dx);
+      if (repeat) continue;
+      seen.emplace_back(o, d);
+      if (geometry::detail::cut_by_bisector(*cell, d, *scratch)) std::swap(cell, scratch);
+      if (faces.face_of[static_cast<std::size_t>(o)] >= 0)
+        fc.nearby[k].push_back(static_cast<std::uint32_t>(faces.face_of[static_cast<std::size_t>(o)]));
+    }
+  // drop repeated vertices (a cut through a vertex leaves one), which would be edges without a normal
+  ConvexPolygon& out = fc.polygon[k];
+  out.clear();
+  for (int v = 0; v < cell->n; ++v) {
+    const Vec<2>& q = (*cell)[v];
+    if (out.n > 0 && (q - out[out.n - 1]).squaredNorm() <= 1e-24 * dx * dx) continue;
+    out.push(q);
+  }
+  while (out.n > 1 && (out[0] - out[out.n - 1]).squaredNorm() <= 1e-24 * dx * dx) --out.n;
+  fc.site[k] = xc;
+  fc.bounds[k] = geometry::bounds(out);
+  volume[c] = geometry::area(*cell);
+}
+
+/// The visitor of the second pass over the old cells (2D): each old cell's share of the face region,
+/// handed out by its exact overlaps with the face cells.
+template <bool E>
+struct FaceHandOut {
+  const ParticleSet<2, E>* p;
+  const Box<2>* box;
+  const Footprint<2>* fp;
+  const Faces* faces;
+  const FaceCells2* fc;
+  std::vector<FaceSums<2>> sums;
+  std::vector<std::vector<std::uint32_t>> candidates;
+  std::vector<std::vector<double>> omegas;
+
+  void restart() {
+    for (auto& s : sums) s.resize(s.m.size());
+  }
+  void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell, std::span<const Overlap> ov,
+                  double V_o, double) {
+    const auto t = static_cast<std::size_t>(thread);
+    auto& cand = candidates[t];
+    std::int32_t best_face = -1;
+    const auto near = [&](std::int32_t k, auto&& push) {
+      for (const std::uint32_t q : fc->nearby[static_cast<std::size_t>(k)]) push(q);
+    };
+    const double A_F = face_candidates(ov, fp->owner, faces->face_of, near, cand, best_face);
+    if (!(A_F > 0.0)) return;
+    const Vec<2> xo = p->x[a];
+    auto& om = omegas[t];
+    om.assign(cand.size(), 0.0);
+    double A_poly = 0.0;
+    const geometry::Bounds cb = geometry::bounds(cell);
+    for (std::size_t i = 0; i < cand.size(); ++i) {
+      const std::size_t k = cand[i];
+      Vec<2> d = fc->site[k] - xo;  // nearest periodic image of the face site
+      for (int ax = 0; ax < 2; ++ax)
+        if (box->edge[ax] == Edge::periodic) {
+          const double L = box->hi[ax] - box->lo[ax];
+          d[ax] -= L * std::round(d[ax] / L);
+        }
+      const geometry::Bounds& wb = fc->bounds[k];
+      if (((wb.lo + d).array() > cb.hi.array()).any() || ((wb.hi + d).array() < cb.lo.array()).any())
+        continue;  // apart: no overlap, and no clip needed to say so
+      geometry::ConvexPolygon window = fc->polygon[k];
+      for (int v = 0; v < window.n; ++v) window.v[static_cast<std::size_t>(v)] += d;
+      om[i] = geometry::intersection_area(cell, window);
+      A_poly += om[i];
+    }
+    sums[t].hand_out(*p, a, V_o, A_F, A_poly, best_face, cand, om);
+  }
+};
+
+/// The old cells that may meet a face cell: those whose disc of reach (from the overlap pass) touches a
+/// finest cell a face cell owns.
+template <bool E>
+std::vector<std::uint32_t> old_cells_near_faces(const ParticleSet<2, E>& p, const Box<2>& box,
+                                                const lattice::Square& fine, const CellGrid<2>& grid,
+                                                const Footprint<2>& fp, const Faces& faces,
+                                                const std::vector<double>& reach) {
+  require(reach.size() == p.n_real, "multi-level remap: the overlap pass did not record the cells' reach");
+  std::vector<std::uint8_t> in_face(grid.n_cells);  // per finest cell: owned by a face cell
+  for (std::size_t f = 0; f < grid.n_cells; ++f) in_face[f] = faces.face_of[fp.owner[f]] >= 0;
+  std::vector<std::uint32_t> near_faces;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const auto r = fine.cells_touching(box, p.x[a] - Vec<2>::Constant(reach[a]), p.x[a] + Vec<2>::Constant(reach[a]));
+    bool meets = false;
+    for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i)
+      for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j) {
+        const std::int64_t fl = grid.flat({i, j});
+        meets |= fl >= 0 && in_face[static_cast<std::size_t>(fl)];
+      }
+    if (meets) near_faces.push_back(static_cast<std::uint32_t>(a));
+  }
+  return near_faces;
+}
+
+/// The face cells' sums replace theirs in `cells`: the threads' in a fixed order, independent of scheduling.
+template <int D>
+void replace_face_sums(const Faces& faces, const std::vector<FaceSums<D>>& sums, Sums<D>& cells) {
+  for (std::size_t k = 0; k < faces.cells.size(); ++k) {
+    const std::size_t c = faces.cells[k];
+    cells.m[c] = 0.0;
+    cells.E[c] = 0.0;
+    cells.fill[c] = 0.0;
+    cells.mv[c] = Vec<D>::Zero();
+    for (const auto& s : sums) {
+      cells.m[c] += s.m[k];
+      cells.E[c] += s.energy[k];
+      cells.fill[c] += s.fill[k];
+      cells.mv[c] += s.mv[k];
+    }
+  }
+}
+
+/// New cells at level faces (2D). Old cells are Voronoi cells; the new cell of a site whose one-cell ring
+/// holds a cell of another level is taken as its Voronoi cell among the new sites too (as Fig. 1 of the
+/// paper draws both), not its lattice square, so that a set on the lattice remaps onto itself and a
+/// uniform state stays uniform. Elsewhere the two coincide. The face cells tile the same region F as
+/// their lattice squares (a union of finest cells); each old cell's share of F from the finest-cell pass
+/// is handed to the face cells in proportion to its exact overlaps with their Voronoi cells, so the remap
+/// stays exactly conservative. Replaces the face cells' sums in `cells` and their volumes in `volume`.
+template <class Builder, bool E, class Region>
+void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const lattice::Square& fine, Builder& builder,
+                      const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& ws, const Footprint<2>& fp,
+                      Sums<2>& cells, std::vector<double>& volume) {
+  const Faces faces = find_faces<2>(fp.size(), [&](std::size_t c) {
+    const std::int64_t s = fp.span[c], i0 = fp.first_fine[c][0], j0 = fp.first_fine[c][1];
+    for (std::int64_t i = -1; i <= s; ++i)
+      for (std::int64_t j = -1; j <= s; ++j) {
+        if (i >= 0 && i < s && j >= 0 && j < s) continue;
+        const std::int64_t o = owner_at(grid, fp, i0 + i, j0 + j);
+        if (o >= 0 && fp.span[static_cast<std::size_t>(o)] != s) return true;
+      }
+    return false;
+  });
+  if (faces.cells.empty()) return;
+  const std::size_t n_faces = faces.cells.size();
+  FaceCells2 fc{std::vector<geometry::ConvexPolygon>(n_faces), std::vector<Vec<2>>(n_faces),
+                std::vector<geometry::Bounds>(n_faces), std::vector<std::vector<std::uint32_t>>(n_faces)};
+  for (std::size_t k = 0; k < n_faces; ++k) build_face_cell(box, grid, fp, faces, k, fc, volume);
+  for (auto& list : fc.nearby) {
+    std::sort(list.begin(), list.end());
+    list.erase(std::unique(list.begin(), list.end()), list.end());
+  }
+  const auto n_threads = static_cast<std::size_t>(geometry::builder_threads());
+  FaceHandOut<E> hand_out{&p,
+                          &box,
+                          &fp,
+                          &faces,
+                          &fc,
+                          std::vector<FaceSums<2>>(n_threads),
+                          std::vector<std::vector<std::uint32_t>>(n_threads),
+                          std::vector<std::vector<double>>(n_threads)};
+  for (auto& s : hand_out.sums) s.resize(n_faces);
+  // Only the old cells that may meet a face cell are built again.
+  const auto near_faces = old_cells_near_faces(p, box, fine, grid, fp, faces, ws.reach);
+  if (!near_faces.empty())  // (an empty list would mean every cell)
+    for_each_old_cell(p, box, fine, builder, grid, region, ws, hand_out, near_faces);
+  replace_face_sums(faces, hand_out.sums, cells);
+}
+
+/// The 1D counterpart of the above: a face cell's new cell is the interval between the midpoints to its
+/// neighbouring sites.
+template <bool E>
+void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const lattice::Uniform1D& fine,
+                      const RemapParams& params, const CellGrid<1>& grid, const Footprint<1>& fp, Sums<1>& cells,
+                      std::vector<double>& volume) {
+  const double dx = fp.dx;
+  const double L = box.hi[0] - box.lo[0];
+  auto site = [&](std::size_t c) { return fp.site(c)[0]; };
+  // the owner of finest cell i (grid-relative) and the shift of its period; -1 beyond the grid
+  auto owner_at = [&](std::int64_t i, double& shift) -> std::int64_t {
+    const std::int64_t fl = grid.flat({grid.range.lo[0] + i});
+    if (fl < 0) return -1;
+    shift = static_cast<double>(grid.range.lo[0] + i - grid.unflat(static_cast<std::size_t>(fl))[0]) * dx;
+    return static_cast<std::int64_t>(fp.owner[static_cast<std::size_t>(fl)]);
+  };
+  const Faces faces = find_faces<1>(fp.size(), [&](std::size_t c) {
+    double shift = 0.0;
+    const std::int64_t l = owner_at(fp.first_fine[c][0] - 1, shift),
+                       r = owner_at(fp.first_fine[c][0] + fp.span[c], shift);
+    return (l >= 0 && fp.span[static_cast<std::size_t>(l)] != fp.span[c]) ||
+           (r >= 0 && fp.span[static_cast<std::size_t>(r)] != fp.span[c]);
+  });
+  if (faces.cells.empty()) return;
+  const std::size_t n_faces = faces.cells.size();
+  std::vector<double> lo(n_faces), hi(n_faces), face_site(n_faces);
+  std::vector<std::array<std::int32_t, 2>> beside(n_faces);
+  for (std::size_t k = 0; k < n_faces; ++k) {
+    const std::size_t c = faces.cells[k];
+    const double xc = site(c), half = 0.5 * static_cast<double>(fp.span[c]) * dx;
+    double shift = 0.0;
+    const std::int64_t l = owner_at(fp.first_fine[c][0] - 1, shift);
+    lo[k] = l >= 0 ? 0.5 * (site(static_cast<std::size_t>(l)) + shift - xc) : -half;  // a wall or the grid's end
+    beside[k][0] = l >= 0 ? faces.face_of[static_cast<std::size_t>(l)] : -1;
+    const std::int64_t r = owner_at(fp.first_fine[c][0] + fp.span[c], shift);
+    hi[k] = r >= 0 ? 0.5 * (site(static_cast<std::size_t>(r)) + shift - xc) : half;
+    beside[k][1] = r >= 0 ? faces.face_of[static_cast<std::size_t>(r)] : -1;
+    face_site[k] = xc;
+    volume[c] = hi[k] - lo[k];
+  }
+  std::vector<FaceSums<1>> sums(1);
+  sums[0].resize(n_faces);
+  std::vector<std::int32_t> cand;
+  std::vector<double> om;
+  const auto near = [&](std::int32_t k, auto&& push) {
+    for (const std::int32_t q : beside[static_cast<std::size_t>(k)])
+      if (q >= 0) push(q);
+  };
+  auto hand_out = [&](std::size_t a, double left, double right, const auto& ov, double V_o) {
+    std::int32_t best_face = -1;
+    const double A_F = face_candidates(ov, fp.owner, faces.face_of, near, cand, best_face);
+    if (!(A_F > 0.0)) return;
+    const double xo = p.x[a][0];
+    om.assign(cand.size(), 0.0);
+    double A_poly = 0.0;
+    for (std::size_t i = 0; i < cand.size(); ++i) {
+      const auto k = static_cast<std::size_t>(cand[i]);
+      double d = face_site[k] - xo;  // nearest periodic image of the face site
+      if (box.edge[0] == Edge::periodic) d -= L * std::round(d / L);
+      om[i] = std::max(0.0, std::min(right, xo + d + hi[k]) - std::max(left, xo + d + lo[k]));
+      A_poly += om[i];
+    }
+    sums[0].hand_out(p, a, V_o, A_F, A_poly, best_face, cand, om);
   };
   for_each_old_interval(p, box, fine, params, grid, hand_out);
-  for (std::size_t k = 0; k < n_faces; ++k) {
-    const std::size_t c = faces[k];
-    cells.m[c] = m[k];
-    cells.E[c] = energy[k];
-    cells.fill[c] = fill[k];
-    cells.mv[c] = mv[k];
+  for (std::size_t k = 0; k < n_faces; ++k) {  // one pass: the sums themselves, no thread order to fix
+    const std::size_t c = faces.cells[k];
+    cells.m[c] = sums[0].m[k];
+    cells.E[c] = sums[0].energy[k];
+    cells.fill[c] = sums[0].fill[k];
+    cells.mv[c] = sums[0].mv[k];
   }
+}
+
+/// A block's (or a cell's) integer index per axis; not deduced from, so D comes from the other arguments.
+template <int D>
+using BlockIndex = std::type_identity_t<std::array<std::int64_t, static_cast<std::size_t>(D)>>;
+
+/// Every closed axis of the box must hold a whole number of blocks.
+template <int D, class Criterion>
+void check_whole_blocks(const Box<D>& box, const lattice::MultiLevel<D, Criterion>& ml) {
+  for (int k = 0; k < D; ++k)
+    if (box.edge[k] != Edge::open) {
+      const double blocks = (box.hi[k] - box.lo[k]) / (ml.spacing * ml.block_cells);
+      require(std::abs(blocks - std::round(blocks)) < 1e-9 * std::max(1.0, blocks) && std::round(blocks) >= 1,
+              "multi-level lattice: the box length along axis " + std::to_string(k) +
+                  " must be a whole number of blocks (block size " + std::to_string(ml.spacing * ml.block_cells) + ")");
+    }
+}
+
+/// The level-0 mass and volume per block cell that the criteria read, summed from the finest cells' sums;
+/// block0 receives the absolute index of the grid's first block.
+template <int D, class Criterion>
+refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box,
+                                   const CellGrid<D>& grid, const Sums<D>& S, BlockIndex<D>& block0) {
+  const std::int64_t ratio = std::int64_t{1} << ml.max_level;  // finest cells per level-0 cell and axis
+  const std::int64_t align = ratio * ml.block_cells;           // finest cells per block and axis
+  refine::BlockField<D> field;
+  field.spacing = ml.spacing;
+  field.cells_per_block = ml.block_cells;
+  std::array<std::int64_t, D> n0{};
+  std::size_t n_level0 = 1;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
+    n0[k] = grid.count[k] / ratio;
+    field.blocks[k] = grid.count[k] / align;
+    block0[k] = grid.range.lo[k] / align;  // aligned: exact
+    field.periods[k] = grid.periods[k] > 0 ? field.blocks[k] : 0;
+    field.origin[static_cast<int>(k)] =
+        box.lo[static_cast<int>(k)] + static_cast<double>(grid.range.lo[k]) * ml.finest().spacing;
+    n_level0 *= static_cast<std::size_t>(n0[k]);
+  }
+  field.mass.assign(n_level0, 0.0);
+  field.volume.assign(n_level0, 0.0);
+  for (std::size_t f = 0; f < grid.n_cells; ++f) {
+    if (S.fill[f] == 0.0) continue;
+    const auto idx = grid.unflat(f);
+    std::size_t c = 0;
+    for (int k = D - 1; k >= 0; --k) {
+      const auto kk = static_cast<std::size_t>(k);
+      c = c * static_cast<std::size_t>(n0[kk]) + static_cast<std::size_t>((idx[kk] - grid.range.lo[kk]) / ratio);
+    }
+    field.mass[c] += S.m[f];
+    field.volume[c] += S.fill[f];
+  }
+  return field;
+}
+
+/// Block b's absolute index (the grid's blocks start at block0).
+template <int D>
+BlockIndex<D> absolute_block(const refine::BlockField<D>& field, const BlockIndex<D>& block0, std::size_t b) {
+  auto bi = field.block_index(b);
+  for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) bi[k] += block0[k];
+  return bi;
+}
+
+/// Each block's level: the criterion's, capped at the finest level, then 2:1 balanced.
+template <int D, class Criterion>
+std::vector<int> choose_levels(const lattice::MultiLevel<D, Criterion>& ml, const refine::BlockField<D>& field,
+                               const BlockIndex<D>& block0, RemapStats& stats) {
+  std::vector<int> level(field.n_blocks(), 0);
+  for (std::size_t b = 0; b < level.size(); ++b) {
+    const int want =
+        static_cast<int>(ml.criterion.level(field, b, ml.previous_level(absolute_block(field, block0, b))));
+    stats.requested_level = std::max(stats.requested_level, want);
+    if (want > ml.max_level) ++stats.capped_blocks;
+    level[b] = std::clamp(want, 0, ml.max_level);
+  }
+  balance_two_to_one(field, level);
+  return level;
+}
+
+template <int D>
+Footprint<D> footprint(const refine::BlockField<D>& field, const std::vector<int>& level, const CellGrid<D>& grid,
+                       int max_level, std::int64_t align, double dx) {
+  Footprint<D> fp;
+  fp.owner.resize(grid.n_cells);
+  fp.origin = field.origin;
+  fp.dx = dx;
+  for (std::size_t b = 0; b < level.size(); ++b) {
+    const auto bi = field.block_index(b);
+    const std::int64_t s = std::int64_t{1} << (max_level - level[b]);
+    std::array<std::int64_t, D> ci;
+    ci.fill(0);
+    do {
+      std::array<std::int64_t, D> f0;
+      for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) f0[k] = bi[k] * align + ci[k] * s;
+      const auto id = static_cast<std::uint32_t>(fp.first_fine.size());
+      fp.first_fine.push_back(f0);
+      fp.span.push_back(s);
+      fp.level.push_back(level[b]);
+      std::array<std::int64_t, D> fi;  // every finest cell of the footprint
+      fi.fill(0);
+      do {
+        std::array<std::int64_t, D> g;
+        for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) g[k] = grid.range.lo[k] + f0[k] + fi[k];
+        fp.owner[static_cast<std::size_t>(grid.flat(g))] = id;
+      } while (next_index<D>(fi, 0, s));
+    } while (next_index<D>(ci, 0, align / s));
+  }
+  return fp;
+}
+
+/// f(o) for the owners o of the finest cells in the one-cell ring around c's footprint (repeats possible).
+template <int D, class F>
+void for_each_ring_neighbour(const CellGrid<D>& grid, const Footprint<D>& fp, std::size_t c, F&& f) {
+  const std::int64_t s = fp.span[c];
+  std::array<std::int64_t, D> off;
+  off.fill(-1);
+  std::uint32_t last = static_cast<std::uint32_t>(c);
+  do {
+    bool ring = false;
+    std::array<std::int64_t, D> g;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
+      ring = ring || off[k] < 0 || off[k] >= s;
+      g[k] = grid.range.lo[k] + fp.first_fine[c][k] + off[k];
+    }
+    if (ring) {
+      const std::int64_t fl = grid.flat(g);
+      if (fl >= 0) {
+        const std::uint32_t o = fp.owner[static_cast<std::size_t>(fl)];
+        if (o != c && o != last) f(static_cast<std::size_t>(o));  // repeats only cost a comparison
+        last = o;
+      }
+    }
+  } while (next_index<D>(off, -1, s + 1));
 }
 
 }  // namespace detail
@@ -503,177 +688,50 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   const auto fine = ml.finest();
   detail::check_remap_input(p, fine, params);
-  const std::int64_t ratio = std::int64_t{1} << ml.max_level;  // finest cells per level-0 cell and axis
-  const std::int64_t align = ratio * ml.block_cells;           // finest cells per block and axis
-  for (int k = 0; k < D; ++k)
-    if (box.edge[k] != Edge::open) {
-      const double blocks = (box.hi[k] - box.lo[k]) / (ml.spacing * ml.block_cells);
-      require(std::abs(blocks - std::round(blocks)) < 1e-9 * std::max(1.0, blocks) && std::round(blocks) >= 1,
-              "multi-level lattice: the box length along axis " + std::to_string(k) +
-                  " must be a whole number of blocks (block size " + std::to_string(ml.spacing * ml.block_cells) + ")");
-    }
+  const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;  // finest cells per block and axis
+  detail::check_whole_blocks(box, ml);
   const auto grid = detail::candidate_grid(p, box, fine, params, align);
   // remap_face_cells picks the old cells to build again by their reach
   auto& S = detail::accumulate_overlaps(p, box, fine, builder, params, grid, region, ws, ml.max_level > 0);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
-
-  // Level-0 sums for the criteria.
-  refine::BlockField<D> field;
-  field.spacing = ml.spacing;
-  field.cells_per_block = ml.block_cells;
-  std::array<std::int64_t, D> n0{}, block0{};
-  std::size_t n_level0 = 1;
-  for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
-    n0[k] = grid.count[k] / ratio;
-    field.blocks[k] = grid.count[k] / align;
-    block0[k] = grid.range.lo[k] / align;  // aligned: exact
-    field.periods[k] = grid.periods[k] > 0 ? field.blocks[k] : 0;
-    field.origin[static_cast<int>(k)] =
-        box.lo[static_cast<int>(k)] + static_cast<double>(grid.range.lo[k]) * fine.spacing;
-    n_level0 *= static_cast<std::size_t>(n0[k]);
-  }
-  field.mass.assign(n_level0, 0.0);
-  field.volume.assign(n_level0, 0.0);
-  for (std::size_t f = 0; f < grid.n_cells; ++f) {
-    if (S.fill[f] == 0.0) continue;
-    const auto idx = grid.unflat(f);
-    std::size_t c = 0;
-    for (int k = D - 1; k >= 0; --k) {
-      const auto kk = static_cast<std::size_t>(k);
-      c = c * static_cast<std::size_t>(n0[kk]) + static_cast<std::size_t>((idx[kk] - grid.range.lo[kk]) / ratio);
-    }
-    field.mass[c] += S.m[f];
-    field.volume[c] += S.fill[f];
-  }
-
-  // Levels: criterion, cap, 2:1 balance.
-  const std::size_t n_blocks = field.n_blocks();
-  std::vector<int> level(n_blocks, 0);
-  auto absolute = [&](std::size_t b) {
-    auto bi = field.block_index(b);
-    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) bi[k] += block0[k];
-    return bi;
-  };
-  for (std::size_t b = 0; b < n_blocks; ++b) {
-    const int want = static_cast<int>(ml.criterion.level(field, b, ml.previous_level(absolute(b))));
-    stats.requested_level = std::max(stats.requested_level, want);
-    if (want > ml.max_level) ++stats.capped_blocks;
-    level[b] = std::clamp(want, 0, ml.max_level);
-  }
-  detail::balance_two_to_one(field, level);
-
-  // Cells of every block at its level; owner maps each finest cell to its cell.
-  detail::Sums<D> cells;
-  std::vector<std::uint32_t> owner(grid.n_cells);
-  std::vector<std::array<std::int64_t, D>> first_fine;  // lowest finest-cell index (grid-relative) per cell
-  std::vector<std::int64_t> span;                       // finest cells per axis per cell
-  std::vector<int> cell_level;
-  for (std::size_t b = 0; b < n_blocks; ++b) {
-    const auto bi = field.block_index(b);
-    const std::int64_t s = std::int64_t{1} << (ml.max_level - level[b]);
-    const std::int64_t per_axis = align / s;
-    std::array<std::int64_t, D> ci;
-    ci.fill(0);
-    for (;;) {
-      std::array<std::int64_t, D> f0;
-      for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) f0[k] = bi[k] * align + ci[k] * s;
-      const auto id = static_cast<std::uint32_t>(first_fine.size());
-      first_fine.push_back(f0);
-      span.push_back(s);
-      cell_level.push_back(level[b]);
-      // every finest cell of the footprint
-      std::array<std::int64_t, D> fi;
-      fi.fill(0);
-      for (;;) {
-        std::array<std::int64_t, D> g;
-        for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) g[k] = grid.range.lo[k] + f0[k] + fi[k];
-        owner[static_cast<std::size_t>(grid.flat(g))] = id;
-        std::size_t k = 0;
-        for (; k < static_cast<std::size_t>(D); ++k) {
-          if (++fi[k] < s) break;
-          fi[k] = 0;
-        }
-        if (k == static_cast<std::size_t>(D)) break;
-      }
-      std::size_t k = 0;
-      for (; k < static_cast<std::size_t>(D); ++k) {
-        if (++ci[k] < per_axis) break;
-        ci[k] = 0;
-      }
-      if (k == static_cast<std::size_t>(D)) break;
-    }
-  }
-  const std::size_t n_cells = first_fine.size();
+  std::array<std::int64_t, D> block0{};
+  const auto field = detail::level0_field(ml, box, grid, S, block0);
+  const auto level = detail::choose_levels(ml, field, block0, stats);
+  const auto fp = detail::footprint(field, level, grid, ml.max_level, align, fine.spacing);
+  const std::size_t n_cells = fp.size();
+  detail::Sums<D> cells;  // each new cell's sums: those of its finest cells
   cells.resize(n_cells);
   for (std::size_t f = 0; f < grid.n_cells; ++f) {
-    const std::size_t c = owner[f];
+    const std::size_t c = fp.owner[f];
     cells.m[c] += S.m[f];
     cells.mv[c] += S.mv[f];
     cells.E[c] += S.E[f];
     cells.fill[c] += S.fill[f];
   }
-
   std::vector<double> cell_volume(n_cells);
-  for (std::size_t c = 0; c < n_cells; ++c) cell_volume[c] = std::pow(ml.spacing_at(cell_level[c]), D);
+  for (std::size_t c = 0; c < n_cells; ++c) cell_volume[c] = std::pow(ml.spacing_at(fp.level[c]), D);
   if (ml.max_level > 0) {
     if constexpr (D == 2)
-      detail::remap_face_cells(p, box, fine, builder, grid, region, ws, owner, first_fine, span, field.origin, cells,
-                               cell_volume);
+      detail::remap_face_cells(p, box, fine, builder, grid, region, ws, fp, cells, cell_volume);
     else
-      detail::remap_face_cells(p, box, fine, params, grid, owner, first_fine, span, field.origin, cells, cell_volume);
+      detail::remap_face_cells(p, box, fine, params, grid, fp, cells, cell_volume);
   }
-  auto volume = [&](std::size_t c) { return cell_volume[c]; };
-  auto for_each_neighbour = [&](std::size_t c, auto&& f) {
-    // owners of the finest cells in the one-cell ring around c's footprint
-    const std::int64_t s = span[c];
-    std::array<std::int64_t, D> off;
-    off.fill(-1);
-    std::uint32_t last = static_cast<std::uint32_t>(c);
-    for (;;) {
-      bool ring = false;
-      std::array<std::int64_t, D> g;
-      for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
-        ring = ring || off[k] < 0 || off[k] >= s;
-        g[k] = grid.range.lo[k] + first_fine[c][k] + off[k];
-      }
-      if (ring) {
-        const std::int64_t fl = grid.flat(g);
-        if (fl >= 0) {
-          const std::uint32_t o = owner[static_cast<std::size_t>(fl)];
-          if (o != c && o != last) f(static_cast<std::size_t>(o));  // repeats only cost a comparison
-          last = o;
-        }
-      }
-      std::size_t k = 0;
-      for (; k < static_cast<std::size_t>(D); ++k) {
-        if (++off[k] <= s) break;
-        off[k] = -1;
-      }
-      if (k == static_cast<std::size_t>(D)) break;
-    }
-  };
   auto& keep = ws.keep;
-  detail::hand_on_sparse_cells<D>(cells, params, volume, for_each_neighbour, stats.dropped_cells, keep);
-
+  detail::hand_on_sparse_cells<D>(
+      cells, params, [&](std::size_t c) { return cell_volume[c]; },
+      [&](std::size_t c, auto&& f) { detail::for_each_ring_neighbour(grid, fp, c, f); }, stats.dropped_cells, keep);
   auto& order = ws.order;
   order.resize(n_cells);
   std::iota(order.begin(), order.end(), std::size_t{0});
   std::vector<std::size_t> block_of(n_cells);
-  {
-    std::size_t c = 0;
-    for (std::size_t b = 0; b < n_blocks; ++b) {
-      const auto n = static_cast<std::size_t>(std::pow(static_cast<double>(align >> (ml.max_level - level[b])), D));
-      for (std::size_t i = 0; i < n; ++i) block_of[c++] = b;
-    }
-  }
+  for (std::size_t c = 0, b = 0; b < level.size(); ++b)
+    for (auto n = static_cast<std::size_t>(std::pow(static_cast<double>(align >> (ml.max_level - level[b])), D)); n > 0;
+         --n)
+      block_of[c++] = b;
   auto place = [&](std::size_t c) {
-    const double dx = fine.spacing;
-    Vec<D> site;
-    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k)
-      site[static_cast<int>(k)] = field.origin[static_cast<int>(k)] +
-                                  (static_cast<double>(first_fine[c][k]) + 0.5 * static_cast<double>(span[c])) * dx;
-    const int l = cell_level[c];
+    const Vec<D> site = fp.site(c);
+    const int l = fp.level[c];
     double h = params.h_over_dx * ml.spacing_at(l);
     if (ml.h_ramp > 0.0 && l > 0) {
       // distance to the nearest coarser neighbouring block (2:1 balance: one level coarser)
@@ -684,12 +742,11 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
     return std::pair{site, h};
   };
   detail::emit_particles(p, cells, keep, order, place, stats);
-
   stats.per_level.assign(static_cast<std::size_t>(ml.max_level) + 1, 0);
   for (std::size_t c = 0; c < n_cells; ++c)
-    if (keep[c] && cells.m[c] > 0.0) ++stats.per_level[static_cast<std::size_t>(cell_level[c])];
+    if (keep[c] && cells.m[c] > 0.0) ++stats.per_level[static_cast<std::size_t>(fp.level[c])];
   std::map<std::array<std::int64_t, D>, int> levels;
-  for (std::size_t b = 0; b < n_blocks; ++b) levels[absolute(b)] = level[b];
+  for (std::size_t b = 0; b < level.size(); ++b) levels[detail::absolute_block(field, block0, b)] = level[b];
   ml.store_levels(std::move(levels));
   return stats;
 }

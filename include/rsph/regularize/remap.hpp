@@ -313,6 +313,206 @@ CellSides<Lattice> cell_sides(const Lattice& lattice) {
   }
 }
 
+/// The builder's visitor behind for_each_old_cell: each old cell's overlaps on the lattice cells of `grid`,
+/// listed in per-thread scratch and handed to the action.
+template <class Lattice, bool E, class Region, class Action>
+struct OldCellVisitor {
+  const ParticleSet<2, E>* p;
+  const Lattice* lattice;
+  const Box<2>* box;
+  const CellGrid<2>* grid;
+  const Region* region;
+  Action* action;
+  struct alignas(64) Scratch {  // per thread, a cache line apart
+    std::vector<Overlap> overlaps;
+    std::vector<double> lines, omegas;
+    std::vector<std::int64_t> parts;
+  };
+  std::vector<Scratch> scratch;
+  [[no_unique_address]] CellSides<Lattice> sides;
+
+  /// Axis k's part of the flat index of lattice index i: wrapped on periodic axes, clamped at walls (a
+  /// round-off sliver beyond a wall); -1 outside the grid.
+  std::int64_t axis_part(int k, std::int64_t i) const {
+    const auto kk = static_cast<std::size_t>(k);
+    if (grid->periods[kk] > 0) i = wrap_index(i, grid->periods[kk]);
+    i -= grid->range.lo[kk];
+    if (box->edge[k] == Edge::reflecting) i = std::clamp<std::int64_t>(i, 0, grid->count[kk] - 1);
+    if (i < 0 || i >= grid->count[kk]) return -1;
+    return k == 0 ? i : i * grid->count[0];
+  }
+  /// Whether lattice index idx lies beyond a wall (outside the grid along a reflecting axis).
+  bool beyond_wall(std::array<std::int64_t, 2> idx) const {
+    for (int k = 0; k < 2; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      if (box->edge[k] == Edge::reflecting &&
+          (idx[kk] < grid->range.lo[kk] || idx[kk] >= grid->range.lo[kk] + grid->count[kk]))
+        return true;
+    }
+    return false;
+  }
+  /// Cells that are not rectangles do not tile a box with walls: `part`, an old cell's overlap with the
+  /// lattice cell idx beyond a wall (relative to xo), goes to the nearest sites inside among idx's
+  /// neighbours, each taking the piece nearer to it than to the others, just as the old cells, clipped to
+  /// the box, are the Voronoi cells of the sites inside. A lattice set then maps onto itself at walls too.
+  /// Fills `shares` with (index inside, area); returns how many.
+  using Share = std::pair<std::array<std::int64_t, 2>, double>;
+  std::size_t share_beyond_wall(std::array<std::int64_t, 2> idx, const geometry::ConvexPolygon& part, const Vec<2>& xo,
+                                std::array<Share, 8>& shares) const {
+    std::array<Vec<2>, 8> at;
+    std::size_t n = 0;
+    for (std::int64_t dj = -1; dj <= 1; ++dj)
+      for (std::int64_t di = -1; di <= 1; ++di) {
+        const std::array<std::int64_t, 2> nb{idx[0] + di, idx[1] + dj};
+        if ((di == 0 && dj == 0) || beyond_wall(nb)) continue;
+        shares[n].first = nb;
+        at[n++] = lattice->site(*box, nb) - xo;
+      }
+    if (n == 0) {  // no site inside next to it (a box one row wide): the clamped cell takes it all
+      shares[0] = {idx, geometry::area(part)};
+      return 1;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      geometry::ConvexPolygon piece = part;
+      for (std::size_t m = 0; m < n && piece.n >= 3; ++m)
+        if (m != k)  // nearer to at[k] than to at[m]
+          geometry::clip_halfplane(piece, at[m] - at[k], 0.5 * (at[m].squaredNorm() - at[k].squaredNorm()));
+      shares[k].second = geometry::area(piece);
+    }
+    return n;
+  }
+  void restart() { action->restart(); }
+  void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
+    if constexpr (Region::clips) {
+      geometry::ConvexPolygon closed = cell;
+      region->clip(p->x[a], closed);
+      add_cell(thread, a, closed);
+    } else {
+      add_cell(thread, a, cell);
+    }
+  }
+
+  /// The overlaps listed so far for one cell: how many, and V_o their sum in their order.
+  struct Listed {
+    std::size_t n = 0;
+    double V_o = 0.0;
+  };
+
+  void add_cell(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
+    auto& own = scratch[static_cast<std::size_t>(thread)];
+    const Vec<2> xo = p->x[a];
+    geometry::Bounds cb;
+    const double cell_area = geometry::area_and_bounds(cell, cb);
+    const auto r = lattice->cells_touching(*box, Vec<2>(cb.lo + xo), Vec<2>(cb.hi + xo));
+    Listed listed;  // own.overlaps is scratch that keeps its size
+    if constexpr (Lattice::rectangular_cells)
+      list_on_rectangles(own, a, cell, cell_area, r, xo, listed);
+    else
+      list_on_shapes(own, a, cell, cell_area, r, xo, listed);
+    (*action)(thread, a, cell, std::span<const Overlap>(own.overlaps.data(), listed.n), listed.V_o, cell_area);
+  }
+
+  static NumericalError beyond_grid(std::size_t a) {
+    return NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " + std::to_string(a) +
+                          ")");
+  }
+
+  [[gnu::always_inline]] inline void add_overlap(Scratch& own, Listed& l, std::size_t a, std::int64_t col_part,
+                                                 std::int64_t row_part, double omega) const {
+    if ((col_part | row_part) < 0) throw beyond_grid(a);
+    grown(own.overlaps, l.n + 1)[l.n] = {static_cast<std::size_t>(col_part + row_part), omega};
+    ++l.n;
+    l.V_o += omega;
+  }
+
+  /// Rectangular lattice cells: all overlaps in one pass over the cell's edges; round-off crumbs in cells
+  /// the old cell only touches (|omega| ~ 1e-16 of its area) are dropped, and V_o = sum omega keeps mass
+  /// exact.
+  void list_on_rectangles(Scratch& own, std::size_t a, const geometry::ConvexPolygon& cell, double cell_area,
+                          const IndexRange<2>& r, const Vec<2>& xo, Listed& l) const {
+    const auto n_i = static_cast<int>(r.hi[0] - r.lo[0] + 1), n_j = static_cast<int>(r.hi[1] - r.lo[1] + 1);
+    double* xs = grown(own.lines, static_cast<std::size_t>(n_i + n_j + 2));
+    for (int c = 0; c <= n_i; ++c) xs[c] = lattice->line(*box, 0, r.lo[0] + c, xo[0]);
+    double* ys = xs + n_i + 1;
+    for (int c = 0; c <= n_j; ++c) ys[c] = lattice->line(*box, 1, r.lo[1] + c, xo[1]);
+    double* omegas = grown(own.omegas, static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j));
+    geometry::grid_overlaps(cell, xs, n_i, ys, n_j, omegas);
+    // The flat index is a column part plus a row part: each is wrapped (periodic) or clamped (walls)
+    // once per cell instead of once per overlap.
+    std::int64_t* cols = grown(own.parts, static_cast<std::size_t>(n_i + n_j));
+    std::int64_t* rows = cols + n_i;
+    for (int i = 0; i < n_i; ++i) cols[i] = axis_part(0, r.lo[0] + i);
+    for (int j = 0; j < n_j; ++j) rows[j] = axis_part(1, r.lo[1] + j);
+    // Each overlap is written and kept by advancing the count, without a branch (whether a cell of the grid
+    // holds more than a crumb is a coin toss); so is the check that a kept one lies inside the grid.
+    const double crumb = 1e-13 * cell_area;
+    auto* out = grown(own.overlaps, static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j));
+    std::int64_t outside = 0;
+    std::size_t n_ov = l.n;
+    double V_o = l.V_o;
+    for (int i = 0; i < n_i; ++i)
+      for (int j = 0; j < n_j; ++j) {
+        const double omega = omegas[i * n_j + j];
+        const bool kept = omega > crumb;
+        out[n_ov] = {static_cast<std::size_t>(cols[i] + rows[j]), omega};
+        outside |= kept ? cols[i] | rows[j] : 0;
+        V_o += kept ? omega : 0.0;
+        n_ov += kept;
+      }
+    if (outside < 0) throw beyond_grid(a);
+    l.n = n_ov;
+    l.V_o = V_o;
+  }
+
+  /// Cells of another shape: every lattice cell is the lattice's shape moved to its site, so all have the
+  /// same side normals; the old cell's extent along each, taken once, tells for each candidate which sides
+  /// cut the old cell and whether one keeps them apart, before any clipping (many in the rectangular index
+  /// range are).
+  void list_on_shapes(Scratch& own, std::size_t a, const geometry::ConvexPolygon& cell, double cell_area,
+                      const IndexRange<2>& r, const Vec<2>& xo, Listed& l) const {
+    std::array<double, geometry::Sides::capacity> reach_lo, reach_hi;
+    for (int k = 0; k < sides.n; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      reach_lo[kk] = std::numeric_limits<double>::max();
+      reach_hi[kk] = std::numeric_limits<double>::lowest();
+      for (int v = 0; v < cell.n; ++v) {
+        const double d = sides.normal[kk].dot(cell[v]);
+        reach_lo[kk] = std::min(reach_lo[kk], d);
+        reach_hi[kk] = std::max(reach_hi[kk], d);
+      }
+    }
+    for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
+      for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
+        const Vec<2> site = lattice->site(*box, {i, j}) - xo;
+        std::uint32_t cutting = 0;
+        bool apart = false;
+        for (int k = 0; k < sides.n; ++k) {
+          const auto kk = static_cast<std::size_t>(k);
+          const double offset = sides.offset[kk] + sides.normal[kk].dot(site);
+          apart |= reach_lo[kk] >= offset;
+          cutting |= static_cast<std::uint32_t>(reach_hi[kk] > offset) << k;
+        }
+        if (apart) continue;
+        if (beyond_wall({i, j})) {
+          std::array<Share, 8> shares;
+          const std::size_t n_shares = share_beyond_wall(
+              {i, j},
+              geometry::with_part_within_sides(
+                  cell, sides, cutting, [&](std::size_t k) { return sides.offset[k] + sides.normal[k].dot(site); },
+                  [](const geometry::ConvexPolygon& part) { return part; }),
+              xo, shares);
+          for (std::size_t k = 0; k < n_shares; ++k)
+            if (shares[k].second > 0.0)
+              add_overlap(own, l, a, axis_part(0, shares[k].first[0]), axis_part(1, shares[k].first[1]),
+                          shares[k].second);
+          continue;
+        }
+        const double omega = cutting == 0 ? cell_area : geometry::area_within_sides(cell, sides, site, cutting);
+        if (omega > 0.0) add_overlap(own, l, a, axis_part(0, i), axis_part(1, j), omega);
+      }
+  }
+};
+
 /// Visits every old particle's closed Voronoi cell (2D) with its overlaps on the cells of `grid`:
 /// action(thread, a, cell, overlaps, V_o, cell_area), the cell relative to x_a, overlaps as (flat index,
 /// Omega) and V_o their sum, in their order. The builder may restart (wider periodic images): action.restart() then
@@ -321,177 +521,7 @@ template <class Lattice, class Builder, bool E, class Region, class Action>
 void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Lattice& lattice, Builder& builder,
                        const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& workspace, Action& action,
                        std::span<const std::uint32_t> only = {}) {
-  struct Visitor {
-    const ParticleSet<2, E>* p;
-    const Lattice* lattice;
-    const Box<2>* box;
-    const CellGrid<2>* grid;
-    const Region* region;
-    Action* action;
-    struct alignas(64) Scratch {  // per thread, a cache line apart
-      std::vector<Overlap> overlaps;
-      std::vector<double> lines, omegas;
-      std::vector<std::int64_t> parts;
-    };
-    std::vector<Scratch> scratch;
-    [[no_unique_address]] CellSides<Lattice> sides;
-
-    /// Axis k's part of the flat index of lattice index i: wrapped on periodic axes, clamped at walls (a
-    /// round-off sliver beyond a wall); -1 outside the grid.
-    std::int64_t axis_part(int k, std::int64_t i) const {
-      const auto kk = static_cast<std::size_t>(k);
-      if (grid->periods[kk] > 0) i = wrap_index(i, grid->periods[kk]);
-      i -= grid->range.lo[kk];
-      if (box->edge[k] == Edge::reflecting) i = std::clamp<std::int64_t>(i, 0, grid->count[kk] - 1);
-      if (i < 0 || i >= grid->count[kk]) return -1;
-      return k == 0 ? i : i * grid->count[0];
-    }
-    /// Whether lattice index idx lies beyond a wall (outside the grid along a reflecting axis).
-    bool beyond_wall(std::array<std::int64_t, 2> idx) const {
-      for (int k = 0; k < 2; ++k) {
-        const auto kk = static_cast<std::size_t>(k);
-        if (box->edge[k] == Edge::reflecting &&
-            (idx[kk] < grid->range.lo[kk] || idx[kk] >= grid->range.lo[kk] + grid->count[kk]))
-          return true;
-      }
-      return false;
-    }
-    /// Cells that are not rectangles do not tile a box with walls: `part`, an old cell's overlap with the
-    /// lattice cell idx beyond a wall (relative to xo), goes to the nearest sites inside among idx's
-    /// neighbours, each taking the piece nearer to it than to the others, just as the old cells, clipped to
-    /// the box, are the Voronoi cells of the sites inside. A lattice set then maps onto itself at walls too.
-    /// Fills `shares` with (index inside, area); returns how many.
-    using Share = std::pair<std::array<std::int64_t, 2>, double>;
-    std::size_t share_beyond_wall(std::array<std::int64_t, 2> idx, const geometry::ConvexPolygon& part,
-                                  const Vec<2>& xo, std::array<Share, 8>& shares) const {
-      std::array<Vec<2>, 8> at;
-      std::size_t n = 0;
-      for (std::int64_t dj = -1; dj <= 1; ++dj)
-        for (std::int64_t di = -1; di <= 1; ++di) {
-          const std::array<std::int64_t, 2> nb{idx[0] + di, idx[1] + dj};
-          if ((di == 0 && dj == 0) || beyond_wall(nb)) continue;
-          shares[n].first = nb;
-          at[n++] = lattice->site(*box, nb) - xo;
-        }
-      if (n == 0) {  // no site inside next to it (a box one row wide): the clamped cell takes it all
-        shares[0] = {idx, geometry::area(part)};
-        return 1;
-      }
-      for (std::size_t k = 0; k < n; ++k) {
-        geometry::ConvexPolygon piece = part;
-        for (std::size_t m = 0; m < n && piece.n >= 3; ++m)
-          if (m != k)  // nearer to at[k] than to at[m]
-            geometry::clip_halfplane(piece, at[m] - at[k], 0.5 * (at[m].squaredNorm() - at[k].squaredNorm()));
-        shares[k].second = geometry::area(piece);
-      }
-      return n;
-    }
-    void restart() { action->restart(); }
-    void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
-      if constexpr (Region::clips) {
-        geometry::ConvexPolygon closed = cell;
-        region->clip(p->x[a], closed);
-        add_cell(thread, a, closed);
-      } else {
-        add_cell(thread, a, cell);
-      }
-    }
-    void add_cell(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
-      auto& own = scratch[static_cast<std::size_t>(thread)];
-      std::size_t n_ov = 0;  // own.overlaps is scratch that keeps its size
-      const Vec<2> xo = p->x[a];
-      geometry::Bounds cb;
-      const double cell_area = geometry::area_and_bounds(cell, cb);
-      const auto r = lattice->cells_touching(*box, Vec<2>(cb.lo + xo), Vec<2>(cb.hi + xo));
-      double V_o = 0.0;
-      auto beyond_grid = [&] {
-        return NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
-                              std::to_string(a) + ")");
-      };
-      auto add_overlap = [&](std::int64_t col_part, std::int64_t row_part, double omega) {
-        if ((col_part | row_part) < 0) throw beyond_grid();
-        grown(own.overlaps, n_ov + 1)[n_ov] = {static_cast<std::size_t>(col_part + row_part), omega};
-        ++n_ov;
-        V_o += omega;
-      };
-      if constexpr (Lattice::rectangular_cells) {
-        // All overlaps in one pass over the cell's edges; round-off crumbs in cells the old cell only
-        // touches (|omega| ~ 1e-16 of its area) are dropped, and V_o = sum omega keeps mass exact.
-        const auto n_i = static_cast<int>(r.hi[0] - r.lo[0] + 1), n_j = static_cast<int>(r.hi[1] - r.lo[1] + 1);
-        double* xs = grown(own.lines, static_cast<std::size_t>(n_i + n_j + 2));
-        for (int c = 0; c <= n_i; ++c) xs[c] = lattice->line(*box, 0, r.lo[0] + c, xo[0]);
-        double* ys = xs + n_i + 1;
-        for (int c = 0; c <= n_j; ++c) ys[c] = lattice->line(*box, 1, r.lo[1] + c, xo[1]);
-        double* omegas = grown(own.omegas, static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j));
-        geometry::grid_overlaps(cell, xs, n_i, ys, n_j, omegas);
-        // The flat index is a column part plus a row part: each is wrapped (periodic) or clamped (walls)
-        // once per cell instead of once per overlap.
-        std::int64_t* cols = grown(own.parts, static_cast<std::size_t>(n_i + n_j));
-        std::int64_t* rows = cols + n_i;
-        for (int i = 0; i < n_i; ++i) cols[i] = axis_part(0, r.lo[0] + i);
-        for (int j = 0; j < n_j; ++j) rows[j] = axis_part(1, r.lo[1] + j);
-        // Each overlap is written and kept by advancing the count, without a branch (whether a cell of the grid
-        // holds more than a crumb is a coin toss); so is the check that a kept one lies inside the grid.
-        const double crumb = 1e-13 * cell_area;
-        auto* out = grown(own.overlaps, static_cast<std::size_t>(n_i) * static_cast<std::size_t>(n_j));
-        std::int64_t outside = 0;
-        for (int i = 0; i < n_i; ++i)
-          for (int j = 0; j < n_j; ++j) {
-            const double omega = omegas[i * n_j + j];
-            const bool kept = omega > crumb;
-            out[n_ov] = {static_cast<std::size_t>(cols[i] + rows[j]), omega};
-            outside |= kept ? cols[i] | rows[j] : 0;
-            V_o += kept ? omega : 0.0;
-            n_ov += kept;
-          }
-        if (outside < 0) throw beyond_grid();
-      } else {
-        // Every lattice cell is the lattice's shape moved to its site, so all have the same side normals: the
-        // old cell's extent along each, taken once, tells for each candidate which sides cut the old cell
-        // and whether one keeps them apart, before any clipping (many in the rectangular index range are).
-        std::array<double, geometry::Sides::capacity> reach_lo, reach_hi;
-        for (int k = 0; k < sides.n; ++k) {
-          const auto kk = static_cast<std::size_t>(k);
-          reach_lo[kk] = std::numeric_limits<double>::max();
-          reach_hi[kk] = std::numeric_limits<double>::lowest();
-          for (int v = 0; v < cell.n; ++v) {
-            const double d = sides.normal[kk].dot(cell[v]);
-            reach_lo[kk] = std::min(reach_lo[kk], d);
-            reach_hi[kk] = std::max(reach_hi[kk], d);
-          }
-        }
-        for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
-          for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
-            const Vec<2> site = lattice->site(*box, {i, j}) - xo;
-            std::uint32_t cutting = 0;
-            bool apart = false;
-            for (int k = 0; k < sides.n; ++k) {
-              const auto kk = static_cast<std::size_t>(k);
-              const double offset = sides.offset[kk] + sides.normal[kk].dot(site);
-              apart |= reach_lo[kk] >= offset;
-              cutting |= static_cast<std::uint32_t>(reach_hi[kk] > offset) << k;
-            }
-            if (apart) continue;
-            if (beyond_wall({i, j})) {
-              std::array<Share, 8> shares;
-              const std::size_t n_shares = share_beyond_wall(
-                  {i, j},
-                  geometry::with_part_within_sides(
-                      cell, sides, cutting, [&](std::size_t k) { return sides.offset[k] + sides.normal[k].dot(site); },
-                      [](const geometry::ConvexPolygon& part) { return part; }),
-                  xo, shares);
-              for (std::size_t k = 0; k < n_shares; ++k)
-                if (shares[k].second > 0.0)
-                  add_overlap(axis_part(0, shares[k].first[0]), axis_part(1, shares[k].first[1]), shares[k].second);
-              continue;
-            }
-            const double omega = cutting == 0 ? cell_area : geometry::area_within_sides(cell, sides, site, cutting);
-            if (omega > 0.0) add_overlap(axis_part(0, i), axis_part(1, j), omega);
-          }
-      }
-      (*action)(thread, a, cell, std::span<const Overlap>(own.overlaps.data(), n_ov), V_o, cell_area);
-    }
-  };
+  using Visitor = OldCellVisitor<Lattice, E, Region, Action>;
   Visitor visitor{&p,
                   &lattice,
                   &box,
