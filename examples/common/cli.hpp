@@ -15,6 +15,7 @@
 #include <functional>
 #include <sstream>
 #include <string>
+#include <type_traits>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -22,6 +23,22 @@
 namespace rsph::examples {
 
 namespace po = boost::program_options;
+
+/// The text a person writes for a default: the shortest that reads back to the same value (0.2, 4.8e-05).
+template <class T>
+std::string default_text(const T& v) {
+  if constexpr (std::is_same_v<T, std::string>)
+    return v;
+  else
+    return fmt::format("{}", v);
+}
+
+/// A flag bound to `field`, defaulting to the field's current value, so that a params struct's default is
+/// written once (in the struct) and printed by --help as people write it.
+template <class T>
+po::typed_value<T>* value_of(T& field) {
+  return po::value(&field)->default_value(field, default_text(field));
+}
 
 /// Flags every example has.
 struct CommonOptions {
@@ -32,26 +49,23 @@ struct CommonOptions {
 };
 
 inline void add_common_options(po::options_description& desc, CommonOptions& common) {
-  desc.add_options()("help,h", "show this help and exit")("out", po::value(&common.out)->default_value(common.out),
+  desc.add_options()("help,h", "show this help and exit")("out", value_of(common.out),
                                                           "output folder (created if missing)")(
-      "preset", po::value(&common.preset)->default_value(common.preset),
-      "quick: a small run in seconds; paper: the full setup")("threads", po::value(&common.threads)->default_value(0),
-                                                              "OpenMP threads (0: all cores)")(
-      "quiet", po::bool_switch(&common.quiet), "no progress line");
+      "preset", value_of(common.preset), "quick: a small run in seconds; paper: the full setup")(
+      "threads", value_of(common.threads), "OpenMP threads (0: all cores)")("quiet", po::bool_switch(&common.quiet),
+                                                                            "no progress line");
 }
 
 /// --levels, --block-cells, --refine-above, --coarsen-below and --h-ramp, defaulting to c's values; `who`
 /// starts each help line, `levels_help` says what --levels means in the scene.
 inline void add_level_options(po::options_description& desc, DensityJumpLevels& c, const std::string& who,
                               const std::string& levels_help) {
-  desc.add_options()("levels", po::value(&c.levels)->default_value(c.levels), (who + ": " + levels_help).c_str())(
-      "block-cells", po::value(&c.block_cells)->default_value(c.block_cells),
-      (who + ": level-0 cells per block").c_str())(
-      "refine-above", po::value(&c.refine_above)->default_value(c.refine_above),
+  desc.add_options()("levels", value_of(c.levels), (who + ": " + levels_help).c_str())(
+      "block-cells", value_of(c.block_cells), (who + ": level-0 cells per block").c_str())(
+      "refine-above", value_of(c.refine_above),
       (who + ": relative density jump between level-0 cells that refines a block").c_str())(
-      "coarsen-below", po::value(&c.coarsen_below)->default_value(c.coarsen_below),
-      (who + ": jump below which a block returns to level 0").c_str())(
-      "h-ramp", po::value(&c.h_ramp)->default_value(c.h_ramp),
+      "coarsen-below", value_of(c.coarsen_below), (who + ": jump below which a block returns to level 0").c_str())(
+      "h-ramp", value_of(c.h_ramp),
       (who + ": coarser spacings over which h rises towards a coarser block (0: h jumps)").c_str());
 }
 

@@ -40,13 +40,12 @@ int main(int argc, char** argv) {
     std::string counts_text = "0,100,200,300,400";
     ex::po::options_description desc("rsph-drifting-pulse options");
     ex::add_common_options(desc, common);
-    desc.add_options()("shifts", ex::po::value(&shifts_text)->default_value(shifts_text),
-                       "cases: T_reg v_d / Delta, comma separated")(
-        "counts", ex::po::value(&counts_text)->default_value(counts_text), "regularization counts to record")(
-        "cells", ex::po::value(&base.cells)->default_value(128), "lattice sites on the periodic line")(
-        "pulse-width", ex::po::value(&base.pulse_width)->default_value(4), "pulse width in spacings")(
-        "contrast", ex::po::value(&base.contrast)->default_value(2.0), "pulse density over the background")(
-        "h-over-dx", ex::po::value(&base.h_over_dx)->default_value(1.4), "h / Delta");
+    desc.add_options()("shifts", ex::value_of(shifts_text), "cases: T_reg v_d / Delta, comma separated")(
+        "counts", ex::value_of(counts_text), "regularization counts to record")("cells", ex::value_of(base.cells),
+                                                                                "lattice sites on the periodic line")(
+        "pulse-width", ex::value_of(base.pulse_width), "pulse width in spacings")(
+        "contrast", ex::value_of(base.contrast), "pulse density over the background")(
+        "h-over-dx", ex::value_of(base.h_over_dx), "h / Delta");
     ex::po::variables_map vm;
     if (!ex::parse(
             argc, argv, desc, vm,

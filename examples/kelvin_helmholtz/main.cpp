@@ -19,17 +19,15 @@ int main(int argc, char** argv) {
     std::string method = "rsph";
     ex::po::options_description desc("rsph-kelvin-helmholtz options");
     ex::add_common_options(desc, common);
-    desc.add_options()("method", ex::po::value(&method)->default_value("rsph"), "rsph or sph")(
-        "conductivity", ex::po::value(&s.alpha_u)->default_value(0.0), "artificial conductivity alpha_u (0: off)")(
-        "cells", ex::po::value(&s.cells)->default_value(256), "1 / Delta")(
-        "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(1.2), "h / Delta (SPH: eta)")(
-        "reg-steps", ex::po::value(&s.reg_steps)->default_value(48), "RSPH: steps between regularizations")(
-        "t-end", ex::po::value(&s.t_end)->default_value(0.0), "end time (0: tau_KH = 0.58)")(
-        "courant", ex::po::value(&s.courant)->default_value(0.3), "Courant factor")(
-        "density-ratio", ex::po::value(&s.chi)->default_value(10.0), "density ratio chi of the upper to the lower gas")(
-        "seed-amplitude", ex::po::value(&s.A)->default_value(0.025),
-        "A of the seeded v_y (0: an unseeded shear layer)")(
-        "wavelengths", ex::po::value(&s.wavelengths)->default_value(6),
+    desc.add_options()("method", ex::value_of(method), "rsph or sph")("conductivity", ex::value_of(s.alpha_u),
+                                                                      "artificial conductivity alpha_u (0: off)")(
+        "cells", ex::value_of(s.cells), "1 / Delta")("h-over-dx", ex::value_of(s.h_over_dx), "h / Delta (SPH: eta)")(
+        "reg-steps", ex::value_of(s.reg_steps), "RSPH: steps between regularizations")("t-end", ex::value_of(s.t_end),
+                                                                                       "end time (0: tau_KH = 0.58)")(
+        "courant", ex::value_of(s.courant), "Courant factor")("density-ratio", ex::value_of(s.chi),
+                                                              "density ratio chi of the upper to the lower gas")(
+        "seed-amplitude", ex::value_of(s.A), "A of the seeded v_y (0: an unseeded shear layer)")(
+        "wavelengths", ex::value_of(s.wavelengths),
         "box width in wavelengths of the seeded mode (6: the paper's box; 1: one wavelength, periodic)");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,

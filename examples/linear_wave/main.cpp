@@ -18,17 +18,15 @@ int main(int argc, char** argv) {
     std::string kernel_name = "quintic";
     ex::po::options_description desc("rsph-linear-wave options");
     ex::add_common_options(desc, common);
-    desc.add_options()("wavelength", ex::po::value(&s.wavelength_cells)->default_value(24), "lambda / Delta (even)")(
-        "r", ex::po::value(&s.r)->default_value(4.25), "RSPH: regularization period over wave period (0: plain SPH)")(
-        "alpha", ex::po::value(&s.alpha)->default_value(0.0),
-        "plain SPH (r = 0): artificial viscosity alpha; beta = 2 alpha")(
-        "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(1.2), "h / Delta")(
-        "periods", ex::po::value(&s.periods)->default_value(100), "wave periods to run (N of eq. 11)")(
-        "amplitude", ex::po::value(&s.amplitude)->default_value(1e-3), "density amplitude delta rho / rho")(
-        "jitter", ex::po::value(&s.jitter)->default_value(0.0),
-        "random initial displacement in Delta (seeds instabilities)")(
-        "courant", ex::po::value(&s.courant)->default_value(0.3), "Courant factor")(
-        "kernel", ex::po::value(&kernel_name)->default_value("quintic"), "quintic (the paper's) or cubic");
+    desc.add_options()("wavelength", ex::value_of(s.wavelength_cells), "lambda / Delta (even)")(
+        "r", ex::value_of(s.r), "RSPH: regularization period over wave period (0: plain SPH)")(
+        "alpha", ex::value_of(s.alpha), "plain SPH (r = 0): artificial viscosity alpha; beta = 2 alpha")(
+        "h-over-dx", ex::value_of(s.h_over_dx), "h / Delta")(
+        "periods", ex::value_of(s.periods), "wave periods to run (N of eq. 11)")("amplitude", ex::value_of(s.amplitude),
+                                                                                 "density amplitude delta rho / rho")(
+        "jitter", ex::value_of(s.jitter), "random initial displacement in Delta (seeds instabilities)")(
+        "courant", ex::value_of(s.courant), "Courant factor")("kernel", ex::value_of(kernel_name),
+                                                              "quintic (the paper's) or cubic");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-linear-wave: an isothermal sound wave in a periodic 2 x 0.5 wavelength box.\n"

@@ -20,7 +20,7 @@ struct LinearWaveParams {
   int periods = 100;
   double courant = 0.3;
   double jitter = 0.0;  ///< random displacement in units of Delta, to seed instabilities
-  double r = 0.0;       ///< RSPH: T_reg / P_w (0: plain SPH)
+  double r = 4.25;      ///< RSPH: T_reg / P_w (0: plain SPH; the default is Fig. 3's longest cycle)
   double alpha = 0.0;   ///< plain SPH: artificial viscosity alpha, beta = 2 alpha
 
   void validate() const {

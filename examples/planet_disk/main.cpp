@@ -78,36 +78,30 @@ int main(int argc, char** argv) {
     std::size_t map_nr = 210, map_nphi = 256;
     ex::po::options_description desc("rsph-planet-disk options");
     ex::add_common_options(desc, common);
-    desc.add_options()("method", ex::po::value(&s.method)->default_value(s.method),
+    desc.add_options()("method", ex::value_of(s.method),
                        "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity")(
-        "eos", ex::po::value(&s.eos)->default_value(s.eos), "isothermal (c_s / v_K fixed) or polytropic (eq. 21)")(
-        "q", ex::po::value(&s.q)->default_value(s.q), "M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune")(
-        "resolution", ex::po::value(&resolution)->default_value(resolution),
-        "low (48 000 particles), med (108 000) or high (191 000)")(
+        "eos", ex::value_of(s.eos), "isothermal (c_s / v_K fixed) or polytropic (eq. 21)")(
+        "q", ex::value_of(s.q), "M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune")(
+        "resolution", ex::value_of(resolution), "low (48 000 particles), med (108 000) or high (191 000)")(
         "particles", ex::po::value(&s.particles), "particle count over the disk (overrides --resolution)")(
-        "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(s.h_over_dx), "RSPH: h / Delta; SPH: eta")(
-        "lattice", ex::po::value(&s.lattice)->default_value(s.lattice),
+        "h-over-dx", ex::value_of(s.h_over_dx), "RSPH: h / Delta; SPH: eta")(
+        "lattice", ex::value_of(s.lattice),
         "square or hexagonal: the start and RSPH's regularization lattice (the same particle count)")(
-        "orbits", ex::po::value(&s.orbits)->default_value(s.orbits), "planet orbits to run")(
-        "zone-width", ex::po::value(&s.zone_width)->default_value(s.zone_width),
-        "width of the boundary zones on fixed orbits at both edges")(
-        "courant", ex::po::value(&s.courant)->default_value(s.courant), "time-step Courant factor")(
-        "force", ex::po::value(&s.force)->default_value(s.force), "time-step force factor")(
-        "max-bin", ex::po::value(&s.max_bin)->default_value(s.max_bin),
+        "orbits", ex::value_of(s.orbits), "planet orbits to run")(
+        "zone-width", ex::value_of(s.zone_width), "width of the boundary zones on fixed orbits at both edges")(
+        "courant", ex::value_of(s.courant), "time-step Courant factor")("force", ex::value_of(s.force),
+                                                                        "time-step force factor")(
+        "max-bin", ex::value_of(s.max_bin),
         "RSPH: individual time steps in power-of-two bins, the shortest 2^-max-bin of the longest (0: one "
-        "global step; SPH always steps globally)")("alpha", ex::po::value(&s.alpha)->default_value(s.alpha),
-                                                   "SPH artificial viscosity alpha")(
-        "beta", ex::po::value(&s.beta)->default_value(s.beta), "SPH artificial viscosity beta")(
-        "n-min", ex::po::value(&s.N_min)->default_value(s.N_min), "Appendix A: N_min")(
-        "n-max", ex::po::value(&s.N_max)->default_value(s.N_max), "Appendix A: N_max")(
-        "dn-max", ex::po::value(&s.dN_max)->default_value(s.dN_max), "Appendix A: delta N_max")(
-        "max-steps", ex::po::value(&s.max_steps)->default_value(s.max_steps),
-        "Appendix A: most steps between regularizations")(
-        "measure-every", ex::po::value(&s.measure_every)->default_value(s.measure_every),
-        "orbits between measurements (mass, gap depth)")(
-        "snapshot-every", ex::po::value(&snapshot_every)->default_value(snapshot_every), "orbits between snapshots")(
-        "map-nr", ex::po::value(&map_nr)->default_value(map_nr), "radial cells of the Sigma map")(
-        "map-nphi", ex::po::value(&map_nphi)->default_value(map_nphi), "azimuthal cells of the Sigma map");
+        "global step; SPH always steps globally)")("alpha", ex::value_of(s.alpha), "SPH artificial viscosity alpha")(
+        "beta", ex::value_of(s.beta), "SPH artificial viscosity beta")(
+        "n-min", ex::value_of(s.N_min), "Appendix A: N_min")("n-max", ex::value_of(s.N_max), "Appendix A: N_max")(
+        "dn-max", ex::value_of(s.dN_max), "Appendix A: delta N_max")("max-steps", ex::value_of(s.max_steps),
+                                                                     "Appendix A: most steps between regularizations")(
+        "measure-every", ex::value_of(s.measure_every), "orbits between measurements (mass, gap depth)")(
+        "snapshot-every", ex::value_of(snapshot_every), "orbits between snapshots")(
+        "map-nr", ex::value_of(map_nr), "radial cells of the Sigma map")("map-nphi", ex::value_of(map_nphi),
+                                                                         "azimuthal cells of the Sigma map");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-planet-disk: planet-disk interaction of §5 (de Val-Borro et al. 2006 set-up).\n"

@@ -127,25 +127,24 @@ int main(int argc, char** argv) {
     Options opt;
     ex::po::options_description desc("rsph-sod options");
     ex::add_common_options(desc, opt.common);
-    desc.add_options()("dim", ex::po::value(&opt.dim)->default_value(1), "1, or 2 for a strip periodic in y")(
-        "n-left", ex::po::value(&opt.sod.n_left)->default_value(400), "particles across the left half")(
-        "ny-left", ex::po::value(&opt.sod.ny_left)->default_value(8), "2D: particles across the strip (left state)")(
-        "h-over-dx", ex::po::value(&opt.sod.h_over_dx)->default_value(1.2), "h / particle spacing")(
-        "alpha", ex::po::value(&opt.sod.alpha)->default_value(1.0), "artificial viscosity alpha")(
-        "beta", ex::po::value(&opt.sod.beta)->default_value(2.0), "artificial viscosity beta")(
-        "t-end", ex::po::value(&opt.sod.t_end)->default_value(0.2), "end time")(
-        "courant", ex::po::value(&opt.sod.courant)->default_value(0.3), "Courant factor")(
-        "gamma", ex::po::value(&opt.sod.gamma)->default_value(1.4), "ratio of specific heats")(
-        "kernel", ex::po::value(&opt.kernel)->default_value("cubic"), "cubic, quintic or wendland")(
-        "snapshots", ex::po::value(&opt.snapshots)->default_value(5), "HDF5 snapshots after the initial one")(
-        "method", ex::po::value(&opt.method)->default_value("sph"),
+    desc.add_options()("dim", ex::value_of(opt.dim), "1, or 2 for a strip periodic in y")(
+        "n-left", ex::value_of(opt.sod.n_left), "particles across the left half")(
+        "ny-left", ex::value_of(opt.sod.ny_left), "2D: particles across the strip (left state)")(
+        "h-over-dx", ex::value_of(opt.sod.h_over_dx), "h / particle spacing")(
+        "alpha", ex::value_of(opt.sod.alpha), "artificial viscosity alpha")("beta", ex::value_of(opt.sod.beta),
+                                                                            "artificial viscosity beta")(
+        "t-end", ex::value_of(opt.sod.t_end), "end time")("courant", ex::value_of(opt.sod.courant), "Courant factor")(
+        "gamma", ex::value_of(opt.sod.gamma), "ratio of specific heats")(
+        "kernel", ex::value_of(opt.kernel), "cubic, quintic or wendland")("snapshots", ex::value_of(opt.snapshots),
+                                                                          "HDF5 snapshots after the initial one")(
+        "method", ex::value_of(opt.method),
         "sph: equal masses, grad-h; rsph: lattice regularization, levels in factors of two")(
-        "cycle", ex::po::value(&opt.rsph.cycle)->default_value(10), "rsph: steps between regularizations")(
+        "cycle", ex::value_of(opt.rsph.cycle), "rsph: steps between regularizations")(
         "consistent-gradient", ex::po::bool_switch(&opt.consistent_gradient),
         "rsph: continuity density and pair gradients corrected so that level faces keep uniform states exact")(
-        "gradient-tolerance", ex::po::value(&opt.gradient.tolerance)->default_value(1e-12),
+        "gradient-tolerance", ex::value_of(opt.gradient.tolerance),
         "rsph: relative residual of the consistent-gradient solve")(
-        "max-bin", ex::po::value(&opt.rsph.max_bin)->default_value(0),
+        "max-bin", ex::value_of(opt.rsph.max_bin),
         "rsph: individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: global)");
     ex::add_level_options(desc, opt.rsph.refinement, "rsph",
                           "finest level L (0: uniform); the finest spacing is 0.5 / n-left");

@@ -19,20 +19,19 @@ int main(int argc, char** argv) {
     std::string method = "rsph";
     ex::po::options_description desc("rsph-strong-shock options");
     ex::add_common_options(desc, common);
-    desc.add_options()("method", ex::po::value(&method)->default_value("rsph"), "rsph or sph")(
-        "alpha", ex::po::value(&s.alpha)->default_value(1.0), "artificial viscosity alpha")(
-        "beta", ex::po::value(&s.beta)->default_value(2.0), "artificial viscosity beta")(
-        "nx", ex::po::value(&s.nx)->default_value(512), "RSPH: lattice cells along x")(
-        "ny", ex::po::value(&s.ny)->default_value(8), "RSPH: lattice rows across the strip")(
-        "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(2.0), "RSPH: h / Delta")(
-        "max-steps", ex::po::value(&s.max_steps)->default_value(128), "RSPH: most steps between regularizations")(
-        "sph-left", ex::po::value(&s.sph_nx_left)->default_value(800), "SPH: particles along x, left half")(
-        "sph-left-rows", ex::po::value(&s.sph_ny_left)->default_value(32), "SPH: rows, left half")(
-        "sph-right", ex::po::value(&s.sph_nx_right)->default_value(100), "SPH: particles along x, right half")(
-        "sph-right-rows", ex::po::value(&s.sph_ny_right)->default_value(4), "SPH: rows, right half")(
-        "eta", ex::po::value(&s.eta)->default_value(1.2), "SPH: h = eta (m / rho)^(1/2)")(
-        "t-end", ex::po::value(&s.t_end)->default_value(2.5e-6), "end time")(
-        "courant", ex::po::value(&s.courant)->default_value(0.2), "Courant factor");
+    desc.add_options()("method", ex::value_of(method), "rsph or sph")(
+        "alpha", ex::value_of(s.alpha), "artificial viscosity alpha")("beta", ex::value_of(s.beta),
+                                                                      "artificial viscosity beta")(
+        "nx", ex::value_of(s.nx), "RSPH: lattice cells along x")("ny", ex::value_of(s.ny),
+                                                                 "RSPH: lattice rows across the strip")(
+        "h-over-dx", ex::value_of(s.h_over_dx), "RSPH: h / Delta")("max-steps", ex::value_of(s.max_steps),
+                                                                   "RSPH: most steps between regularizations")(
+        "sph-left", ex::value_of(s.sph_nx_left), "SPH: particles along x, left half")(
+        "sph-left-rows", ex::value_of(s.sph_ny_left), "SPH: rows, left half")("sph-right", ex::value_of(s.sph_nx_right),
+                                                                              "SPH: particles along x, right half")(
+        "sph-right-rows", ex::value_of(s.sph_ny_right), "SPH: rows, right half")(
+        "eta", ex::value_of(s.eta), "SPH: h = eta (m / rho)^(1/2)")("t-end", ex::value_of(s.t_end), "end time")(
+        "courant", ex::value_of(s.courant), "Courant factor");
     ex::add_level_options(desc, s.refinement, "RSPH",
                           "finest level of a lattice in factors of two (0: uniform); nx, ny count finest cells");
     ex::po::variables_map vm;

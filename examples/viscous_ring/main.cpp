@@ -22,23 +22,21 @@ int main(int argc, char** argv) {
     std::string taus = "0.054,0.090,0.126,0.162,0.198";
     ex::po::options_description desc("rsph-viscous-ring options");
     ex::add_common_options(desc, common);
-    desc.add_options()("nu", ex::po::value(&s.nu)->default_value(4.8e-5), "prescribed kinematic viscosity nu_s")(
-        "h", ex::po::value(&s.h)->default_value(0.02), "smoothing length (R_0)")(
-        "h-over-dx", ex::po::value(&s.h_over_dx)->default_value(1.6), "h / Delta")(
-        "cycle", ex::po::value(&s.cycle)->default_value(4),
+    desc.add_options()("nu", ex::value_of(s.nu), "prescribed kinematic viscosity nu_s")(
+        "h", ex::value_of(s.h), "smoothing length (R_0)")("h-over-dx", ex::value_of(s.h_over_dx), "h / Delta")(
+        "cycle", ex::value_of(s.cycle),
         "regularization cycle c_r in units of --cycle-unit steps (0: never regularize)")(
-        "cycle-unit", ex::po::value(&s.cycle_unit)->default_value(40), "steps per unit of c_r")(
-        "viscosity", ex::po::value(&s.viscosity)->default_value("mg"),
+        "cycle-unit", ex::value_of(s.cycle_unit), "steps per unit of c_r")(
+        "viscosity", ex::value_of(s.viscosity),
         "mg: Monaghan-Gingold with alpha from nu_s (the paper); ns: Navier-Stokes stress tensor")(
-        "lattice", ex::po::value(&s.lattice)->default_value("square"),
+        "lattice", ex::value_of(s.lattice),
         "regularization lattice: square (the paper's) or hexagonal (Delta the nearest-neighbour distance)")(
-        "taus", ex::po::value(&taus)->default_value(taus), "snapshot times tau* (comma separated)")(
-        "sigma-floor", ex::po::value(&s.sigma_floor)->default_value(1e-4),
-        "initial annulus: where Sigma exceeds this fraction of its peak")(
-        "inner-radius", ex::po::value(&s.inner_radius)->default_value(0.1), "accretion radius (R_0)")(
-        "bin-width", ex::po::value(&s.bin_width)->default_value(0.01), "radial bin width (R_0)")(
-        "force", ex::po::value(&s.force)->default_value(0.25), "time-step force factor")(
-        "max-bin", ex::po::value(&s.max_bin)->default_value(0),
+        "taus", ex::value_of(taus), "snapshot times tau* (comma separated)")(
+        "sigma-floor", ex::value_of(s.sigma_floor), "initial annulus: where Sigma exceeds this fraction of its peak")(
+        "inner-radius", ex::value_of(s.inner_radius), "accretion radius (R_0)")(
+        "bin-width", ex::value_of(s.bin_width), "radial bin width (R_0)")("force", ex::value_of(s.force),
+                                                                          "time-step force factor")(
+        "max-bin", ex::value_of(s.max_bin),
         "individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: one global step)");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
