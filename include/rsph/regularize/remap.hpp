@@ -428,8 +428,9 @@ struct OldCellVisitor {
   /// Rectangular lattice cells: all overlaps in one pass over the cell's edges; round-off crumbs in cells
   /// the old cell only touches (|omega| ~ 1e-16 of its area) are dropped, and V_o = sum omega keeps mass
   /// exact.
-  void list_on_rectangles(Scratch& own, std::size_t a, const geometry::ConvexPolygon& cell, double cell_area,
-                          const IndexRange<2>& r, const Vec<2>& xo, Listed& l) const {
+  [[gnu::always_inline]] inline void list_on_rectangles(Scratch& own, std::size_t a,
+                                                        const geometry::ConvexPolygon& cell, double cell_area,
+                                                        const IndexRange<2>& r, const Vec<2>& xo, Listed& l) const {
     const auto n_i = static_cast<int>(r.hi[0] - r.lo[0] + 1), n_j = static_cast<int>(r.hi[1] - r.lo[1] + 1);
     double* xs = grown(own.lines, static_cast<std::size_t>(n_i + n_j + 2));
     for (int c = 0; c <= n_i; ++c) xs[c] = lattice->line(*box, 0, r.lo[0] + c, xo[0]);
@@ -468,8 +469,9 @@ struct OldCellVisitor {
   /// same side normals; the old cell's extent along each, taken once, tells for each candidate which sides
   /// cut the old cell and whether one keeps them apart, before any clipping (many in the rectangular index
   /// range are).
-  void list_on_shapes(Scratch& own, std::size_t a, const geometry::ConvexPolygon& cell, double cell_area,
-                      const IndexRange<2>& r, const Vec<2>& xo, Listed& l) const {
+  [[gnu::always_inline]] inline void list_on_shapes(Scratch& own, std::size_t a, const geometry::ConvexPolygon& cell,
+                                                    double cell_area, const IndexRange<2>& r, const Vec<2>& xo,
+                                                    Listed& l) const {
     std::array<double, geometry::Sides::capacity> reach_lo, reach_hi;
     for (int k = 0; k < sides.n; ++k) {
       const auto kk = static_cast<std::size_t>(k);
