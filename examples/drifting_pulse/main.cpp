@@ -1,6 +1,6 @@
 // rsph-drifting-pulse: the numerical diffusion of regularization alone (§2.1, Fig. 2 of the paper).
 #include "common/cli.hpp"
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "drifting_pulse/scene.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
@@ -80,26 +80,30 @@ int main(int argc, char** argv) {
       const auto case_dir = dir / ("shift_" + tag);
       io::ensure_directory(case_dir);
       io::Json width_json;
-      for (std::size_t k = 0; k < counts.size(); ++k) {
-        while (sim.regularizations() < static_cast<std::uint64_t>(counts[k])) sim.step();
-        const auto x = scenes::comoving_positions(sim, s.v_drift);
-        const auto& p = sim.particles();
-        io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", counts[k]), {"x", "rho", "m"});
+      std::vector<ex::AfterRegularizations> stops;
+      for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
+      ex::Snapshots snapshots(case_dir);
+      const auto cost = ex::run_stops(sim, stops, ex::NoHook{}, [&](const auto& sm, int k) {
+        if (k < 0) return;
+        const int count = counts[static_cast<std::size_t>(k)];
+        const auto x = scenes::comoving_positions(sm, s.v_drift);
+        const auto& p = sm.particles();
+        io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
         for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
         csv.close();
-        io::write_snapshot(case_dir / io::snapshot_name(k), p, sim.time(), sim.steps());
-        const double w = scenes::pulse_width_mass(sim, s);
-        width_json.set(std::to_string(counts[k]), w);
-        widths.row({shift, static_cast<double>(counts[k]), w});
-      }
+        snapshots.write(sm);
+        const double w = scenes::pulse_width_mass(sm, s);
+        width_json.set(std::to_string(count), w);
+        widths.row({shift, static_cast<double>(count), w});
+      });
       const double mass_error = ex::relative_change(sim.totals().mass, m0);
       io::Json c;
       c.set("width_mass", width_json).set("mass_error", mass_error).set("regularizations", sim.regularizations());
       c.set("kinetic_energy_dissipated", sim.kinetic_energy_removed());
       cases.set(tag, c);
-      steps += sim.steps();
-      updates += sim.particle_updates();
-      reg_seconds += sim.phase_times().regularization;
+      steps += cost.steps;
+      updates += cost.updates;
+      reg_seconds += cost.phases.regularization;
       fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", tag, counts.back(),
                  scenes::pulse_width_mass(sim, s), mass_error);
     }

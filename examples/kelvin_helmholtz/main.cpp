@@ -1,6 +1,6 @@
 // rsph-kelvin-helmholtz: KH growth at density ratio 10 (§3.3, Fig. 5), RSPH or plain SPH, +- conductivity.
 #include "common/cli.hpp"
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "kelvin_helmholtz/scene.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
@@ -45,8 +45,10 @@ int main(int argc, char** argv) {
     auto on_step = [&](const auto& sim) {
       if (!common.quiet) progress.update(sim.time(), sim.steps());
     };
+    io::Json scheme;
     auto on_end = [&](const auto& sim) {
       io::write_snapshot(dir / io::snapshot_name(1), sim.particles(), sim.time(), sim.steps());
+      ex::write_scheme(scheme, sim);
     };
     {
       // the initial state, for the record
@@ -66,7 +68,7 @@ int main(int argc, char** argv) {
     summary.set("h_over_dx", s.h_over_dx).set("courant", s.courant).set("wavelengths", s.wavelengths);
     summary.set("density_ratio", s.chi).set("seed_amplitude", s.A);
     if (method == "rsph") summary.set("reg_steps", s.reg_steps);
-    summary.set("particles", r.particles).set("tau_KH", s.tau_KH()).set("time", r.t.back());
+    summary.set("particles", r.particles_final).set("tau_KH", s.tau_KH()).set("time", r.t.back());
     summary.set("amplitude_seed", r.seed).set("amplitude_final", r.amplitude_final);
     summary.set("amplification", r.amplitude_final / r.seed).set("growth_rate", r.growth_rate);
     summary.set("growth_rate_incompressible", 2.0 * std::numbers::pi / s.tau_KH());
@@ -74,14 +76,14 @@ int main(int argc, char** argv) {
     if (r.folds)
       summary.set("overturned_fraction", r.folds->overturned_fraction)
           .set("interface_crossings", r.folds->mean_crossings);
-    summary.set("energy_error", r.energy_error).set("wall_seconds", r.wall_seconds).set("steps", r.steps);
-    summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
-    summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
+    summary.set("energy_error", r.energy_error);
+    ex::write_cost(summary, r);
+    summary.merge(scheme);
     summary.write(dir / "summary.json");
     std::string line = fmt::format(
         "rsph-kelvin-helmholtz {} alpha_u = {}: {} particles, {} steps, {:.1f} s; amplitude "
         "{:.4f} -> {:.4f}",
-        method, s.alpha_u, r.particles, r.steps, r.wall_seconds, r.seed, r.amplitude_final);
+        method, s.alpha_u, r.particles_final, r.steps, r.wall_seconds, r.seed, r.amplitude_final);
     if (r.seed > 0.0) line += fmt::format(" (x{:.1f})", r.amplitude_final / r.seed);
     line +=
         fmt::format(", growth rate {:.2f} (linear theory {:.2f})", r.growth_rate, 2.0 * std::numbers::pi / s.tau_KH());

@@ -4,6 +4,7 @@
 // 1 below; P = 2.5; gamma = 5/3; v_x = 0.5 below, -0.5 above; v_y = A sin(-k (x + 0.5)) within 0.025 of
 // the interface, A = 0.025, k = 12 pi; no artificial viscosity. The box holds six wavelengths of the seeded
 // mode; `wavelengths` narrows it (periodic, so one wavelength evolves the seeded mode alike at a sixth of the cost).
+#include "common/runner.hpp"
 #include "rsph/rsph.hpp"
 
 #include <chrono>
@@ -139,13 +140,12 @@ analysis::InterfaceFolds interface_folds(const P& p, const KelvinHelmholtzParams
   return analysis::interface_folds<kernel::CubicSpline>(p, s.box(), std::sqrt(s.chi), 0.25 / s.cells);
 }
 
-struct KhRun {
+struct KhRun : examples::RunCost {
   std::vector<double> t, amplitude, thickness;  ///< per step: time, mode amplitude, momentum thickness
   double seed = 0.0, amplitude_final = 0.0, growth_rate = 0.0;
-  double energy_error = 0.0, wall_seconds = 0.0, regularization_seconds = 0.0;
+  double energy_error = 0.0;
   /// At the end: how far the interface has rolled up (with two phases, chi > 1).
   std::optional<analysis::InterfaceFolds> folds;
-  std::uint64_t steps = 0, updates = 0, regularizations = 0, particles = 0;
 };
 
 /// Least-squares slope of ln M over [t0, t1]: the growth rate of the linear phase.
@@ -159,65 +159,70 @@ inline double fitted_growth_rate(const std::vector<double>& t, const std::vector
   return x.size() >= 2 ? analysis::least_squares_slope(x, y) : 0.0;
 }
 
+/// Runs a simulation of the scene to its end time (examples::run_stops), recording the mode amplitude and
+/// the momentum thickness after every step; on_step(sim) after each step, on_end(sim) at the end.
 template <class Sim, class OnStep, class OnEnd>
 KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end) {
   KhRun r;
-  const auto t0 = std::chrono::steady_clock::now();
   const double E0 = sim.totals().total_energy();
-  r.seed = mode_amplitude(sim.particles(), s.k);
-  r.t.push_back(0.0);
-  r.amplitude.push_back(r.seed);
-  r.thickness.push_back(momentum_thickness(sim.particles(), s));
-  sim.run_until(s.end_time(), [&](const auto& sm) {
+  auto record = [&](const auto& sm) {
     r.t.push_back(sm.time());
     r.amplitude.push_back(mode_amplitude(sm.particles(), s.k));
     r.thickness.push_back(momentum_thickness(sm.particles(), s));
-    on_step(sm);
-  });
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  };
+  record(sim);
+  r.seed = r.amplitude.front();
+  static_cast<examples::RunCost&>(r) = examples::run_stops(
+      sim, examples::at_times({s.end_time()}),
+      [&](const auto& sm) {
+        record(sm);
+        on_step(sm);
+      },
+      examples::NoHook{});
   on_end(sim);
   r.amplitude_final = r.amplitude.back();
   if (s.chi > 1.0) r.folds = interface_folds(sim.particles(), s);
   r.growth_rate = fitted_growth_rate(r.t, r.amplitude, 0.1 * s.tau_KH(), 0.5 * s.tau_KH());
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
-  r.steps = sim.steps();
-  r.updates = sim.particle_updates();
-  r.regularizations = sim.regularizations();
-  r.regularization_seconds = sim.phase_times().regularization;
-  r.particles = sim.particles().n_real;
   return r;
 }
 
-/// Runs one of the four variants: RSPH or SPH, with or without conductivity.
-template <class OnStep, class OnEnd>
-KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end) {
-  using K = kernel::CubicSpline;
-  using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps>;
+/// The scene's methods: RSPH on the square lattice, regularized every reg_steps, and grad-h SPH with equal
+/// masses; each with Price's conductivity or without.
+using KhKernel = kernel::CubicSpline;
+using KhRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps>;
+template <class... Terms>
+using RsphKh = Simulation<2, KhKernel, eos::IdealGas, KhRegularizer, Terms...>;
+template <class... Terms>
+using SphKh = Simulation<2, KhKernel, eos::IdealGas, regularize::None, physics::GradH<2>, Terms...>;
+
+inline TimeStepParams kh_time_steps(const KelvinHelmholtzParams& s) {
   TimeStepParams ts;
   ts.courant = s.courant;
-  const eos::IdealGas gas{s.gamma};
-  auto reg = [&] {
-    return Reg(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
-               regularize::RemapParams{s.h_over_dx});
-  };
-  if (rsph && s.alpha_u > 0) {
-    Simulation<2, K, eos::IdealGas, Reg, physics::ArtificialConductivity> sim(
-        kh_lattice(s, s.h_over_dx), s.box(), gas, reg(), ts, physics::ArtificialConductivity{s.alpha_u});
-    return run_kh(sim, s, on_step, on_end);
-  }
-  if (rsph) {
-    Simulation<2, K, eos::IdealGas, Reg> sim(kh_lattice(s, s.h_over_dx), s.box(), gas, reg(), ts);
-    return run_kh(sim, s, on_step, on_end);
-  }
-  if (s.alpha_u > 0) {
-    Simulation<2, K, eos::IdealGas, regularize::None, physics::GradH<2>, physics::ArtificialConductivity> sim(
-        kh_equal_mass(s), s.box(), gas, regularize::None{}, ts, physics::GradH<2>{s.h_over_dx},
-        physics::ArtificialConductivity{s.alpha_u});
-    return run_kh(sim, s, on_step, on_end);
-  }
-  Simulation<2, K, eos::IdealGas, regularize::None, physics::GradH<2>> sim(
-      kh_equal_mass(s), s.box(), gas, regularize::None{}, ts, physics::GradH<2>{s.h_over_dx});
-  return run_kh(sim, s, on_step, on_end);
+  return ts;
+}
+
+template <class... Terms>
+RsphKh<Terms...> make_rsph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
+  return RsphKh<Terms...>(kh_lattice(s, s.h_over_dx), s.box(), eos::IdealGas{s.gamma},
+                          KhRegularizer(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
+                                        regularize::RemapParams{s.h_over_dx}),
+                          kh_time_steps(s), terms...);
+}
+
+template <class... Terms>
+SphKh<Terms...> make_sph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
+  return SphKh<Terms...>(kh_equal_mass(s), s.box(), eos::IdealGas{s.gamma}, regularize::None{}, kh_time_steps(s),
+                         physics::GradH<2>{s.h_over_dx}, terms...);
+}
+
+/// Runs one of the four variants: RSPH or SPH, with conductivity when alpha_u > 0.
+template <class OnStep, class OnEnd>
+KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end) {
+  auto run = [&](auto sim) { return run_kh(sim, s, on_step, on_end); };
+  const physics::ArtificialConductivity conduct{s.alpha_u};
+  if (rsph) return s.alpha_u > 0 ? run(make_rsph_kh(s, conduct)) : run(make_rsph_kh(s));
+  return s.alpha_u > 0 ? run(make_sph_kh(s, conduct)) : run(make_sph_kh(s));
 }
 
 }  // namespace rsph::scenes

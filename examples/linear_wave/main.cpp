@@ -1,6 +1,6 @@
 // rsph-linear-wave: damping and phase error of an isothermal sound wave, RSPH against SPH (§3.1, Fig. 3).
 #include "common/cli.hpp"
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "linear_wave/scene.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/json.hpp"
@@ -39,20 +39,20 @@ int main(int argc, char** argv) {
     s.validate();
     ex::apply_threads(common.threads);
     const auto dir = ex::prepare_output(common.out);
-    const auto wall0 = std::chrono::steady_clock::now();
     io::Progress progress("rsph-linear-wave", s.periods * s.period());
     auto on_step = [&](const auto& sim) {
       if (!common.quiet) progress.update(sim.time(), sim.steps());
     };
+    ex::Snapshots snapshots(dir);  // the initial and the final state
+    auto at_stop = [&](const auto& sim, int) { snapshots.write(sim); };
     scenes::LinearWaveResult res;
     if (kernel_name == "quintic")
-      res = scenes::run_linear_wave<kernel::QuinticSpline>(s, on_step);
+      res = scenes::run_linear_wave<kernel::QuinticSpline>(s, on_step, at_stop);
     else if (kernel_name == "cubic")
-      res = scenes::run_linear_wave<kernel::CubicSpline>(s, on_step);
+      res = scenes::run_linear_wave<kernel::CubicSpline>(s, on_step, at_stop);
     else
       throw InputError("unknown kernel '" + kernel_name + "' (quintic, cubic)");
     progress.finish();
-    const double wall = ex::seconds_since(wall0);
     io::CsvWriter csv(dir / "sensor.csv", {"time", "delta_rho"});
     for (std::size_t i = 0; i < res.t.size(); ++i) csv.row({res.t[i], res.delta_rho[i]});
     csv.close();
@@ -64,9 +64,8 @@ int main(int argc, char** argv) {
     summary.set("gamma", res.gamma).set("phase_error", res.phase_error).set("amplitude_growth", res.amplitude_growth);
     summary.set("velocity_noise_initial", res.noise_initial).set("velocity_noise_final", res.noise_final);
     summary.set("velocity_noise_growth", res.noise_initial > 0 ? res.noise_final / res.noise_initial : 0.0);
-    summary.set("wall_seconds", wall).set("cpu_seconds", ex::cpu_seconds()).set("steps", res.steps);
-    summary.set("particle_updates_per_second", static_cast<double>(res.updates) / wall);
-    summary.set("regularizations", res.regularizations).set("regularization_seconds", res.regularization_seconds);
+    ex::write_cost(summary, res);
+    summary.set("cpu_seconds", ex::cpu_seconds());
     summary.set("kinetic_energy_dissipated", res.dissipated);
     summary.write(dir / "summary.json");
     fmt::print(
@@ -74,7 +73,7 @@ int main(int argc, char** argv) {
         "transverse noise {:.1e} -> {:.1e}; {} steps, {:.1f} s\n",
         s.r > 0 ? "RSPH" : "SPH", s.wavelength_cells,
         s.r > 0 ? fmt::format("r = {}", s.r) : fmt::format("alpha = {}", s.alpha), res.gamma, res.phase_error,
-        res.amplitude_growth, res.noise_initial, res.noise_final, res.steps, wall);
+        res.amplitude_growth, res.noise_initial, res.noise_final, res.steps, res.wall_seconds);
     return 0;
   });
 }

@@ -1,6 +1,7 @@
 #pragma once
 // §3.1 of the paper: an isothermal linear sound wave in a periodic 2D box of 2 x 0.5 wavelengths,
 // equal-mass particles on a Cartesian lattice displaced for a 0.1 % density amplitude.
+#include "common/runner.hpp"
 #include "linear_wave/analysis.hpp"
 #include "rsph/rsph.hpp"
 
@@ -76,13 +77,12 @@ double sensor_density(const P& p, const Box<2>& box, const Vec<2>& at) {
   return rho;
 }
 
-struct LinearWaveResult {
+struct LinearWaveResult : examples::RunCost {
   std::vector<double> t, delta_rho;
   double gamma = 0.0, phase_error = 0.0;
   double noise_initial = 0.0, noise_final = 0.0;  ///< rms transverse velocity over c A, after one period and at the end
   double amplitude_growth = 0.0;                  ///< S_{N-1} / S_0
-  std::uint64_t steps = 0, updates = 0, regularizations = 0;
-  double regularization_seconds = 0.0, dissipated = 0.0;
+  double dissipated = 0.0;                        ///< kinetic energy the remaps removed (no u to put it in)
 };
 
 namespace detail {
@@ -95,63 +95,83 @@ double transverse_noise(const Sim& sim) {
 }
 }  // namespace detail
 
-/// Runs the wave for `periods` periods, sampling the sensor every step; on_step(sim) after each step.
-template <class Kernel, class OnStep>
-LinearWaveResult run_linear_wave(const LinearWaveParams& s, OnStep&& on_step) {
+/// The scene's methods: RSPH regularized every r wave periods, and plain SPH with artificial viscosity.
+using WaveRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::EveryT>;
+template <class Kernel>
+using RsphWave = Simulation<2, Kernel, eos::Isothermal, WaveRegularizer>;
+template <class Kernel>
+using SphWave = Simulation<2, Kernel, eos::Isothermal, regularize::None, physics::ArtificialViscosity>;
+
+inline TimeStepParams wave_time_steps(const LinearWaveParams& s) {
+  TimeStepParams ts;
+  ts.courant = s.courant;
+  return ts;
+}
+
+template <class Kernel>
+RsphWave<Kernel> make_rsph_wave(const LinearWaveParams& s) {
+  return RsphWave<Kernel>(linear_wave_particles(s), s.box(), eos::Isothermal{s.cs},
+                          WaveRegularizer(lattice::Square{s.spacing()}, schedule::EveryT{s.r * s.period()},
+                                          regularize::RemapParams{s.h_over_dx}),
+                          wave_time_steps(s));
+}
+
+template <class Kernel>
+SphWave<Kernel> make_sph_wave(const LinearWaveParams& s) {
+  return SphWave<Kernel>(linear_wave_particles(s), s.box(), eos::Isothermal{s.cs}, regularize::None{},
+                         wave_time_steps(s), physics::ArtificialViscosity{s.alpha, 2.0 * s.alpha});
+}
+
+/// Runs a simulation of the scene for `periods` periods (examples::run_stops), sampling the sensor every
+/// step, and measures gamma (eq. 11), the phase error and the noise; on_step(sim) after each step,
+/// at_stop(sim, k) at the start (k = -1) and at the end (k = 0).
+template <class Kernel, class Sim, class OnStep, class AtStop>
+LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step, AtStop&& at_stop) {
   const Box<2> box = s.box();
   const Vec<2> sensor(0.5 * s.spacing(), 0.25);  // on a lattice column, mid-height
   // The reference density: the sensor on the unperturbed lattice (removes the lattice-sum bias).
   const double rho_ref = sensor_density<Kernel>(linear_wave_particles(s, false), box, sensor);
-  const double t_end = s.periods * s.period();
-  TimeStepParams ts;
-  ts.courant = s.courant;
-  eos::Isothermal gas{s.cs};
   LinearWaveResult res;
-  auto record = [&](const auto& sim) {
-    res.t.push_back(sim.time());
-    res.delta_rho.push_back(sensor_density<Kernel>(sim.particles(), box, sensor) - rho_ref);
+  auto record = [&](const auto& sm) {
+    res.t.push_back(sm.time());
+    res.delta_rho.push_back(sensor_density<Kernel>(sm.particles(), box, sensor) - rho_ref);
   };
-  auto finish = [&](auto& sim) {
-    record(sim);
-    bool early_noted = false;
-    sim.run_until(t_end, [&](const auto& sm) {
-      record(sm);
-      if (!early_noted && sm.time() >= s.period()) {  // after one period: the seeded noise has spread
-        res.noise_initial = detail::transverse_noise(sm) / (s.amplitude * s.cs);
-        early_noted = true;
-      }
-      on_step(sm);
-    });
-    res.noise_final = detail::transverse_noise(sim) / (s.amplitude * s.cs);
-    res.gamma = analysis::damping_rate(res.t, res.delta_rho, s.period(), s.periods);
-    res.phase_error = analysis::phase_error(res.t, res.delta_rho, s.period());
-    std::vector<double> S(2, 0.0);
-    for (std::size_t i = 0; i < res.t.size(); ++i) {
-      const double k = std::floor(res.t[i] / s.period());
-      if (k == 0) S[0] = std::max(S[0], std::abs(res.delta_rho[i]));
-      if (k == s.periods - 1) S[1] = std::max(S[1], std::abs(res.delta_rho[i]));
-    }
-    res.amplitude_growth = S[1] / S[0];
-    res.steps = sim.steps();
-    res.updates = sim.particle_updates();
-    res.regularizations = sim.regularizations();
-    res.regularization_seconds = sim.phase_times().regularization;
-    res.dissipated = sim.kinetic_energy_removed();
-  };
-  if (s.r > 0.0) {
-    using Reg = regularize::LatticeRegularizer<lattice::Square, schedule::EveryT>;
-    Simulation<2, Kernel, eos::Isothermal, Reg> sim(
-        linear_wave_particles(s), box, gas,
-        Reg(lattice::Square{s.spacing()}, schedule::EveryT{s.r * s.period()}, regularize::RemapParams{s.h_over_dx}),
-        ts);
-    finish(sim);
-  } else {
-    Simulation<2, Kernel, eos::Isothermal, regularize::None, physics::ArtificialViscosity> sim(
-        linear_wave_particles(s), box, gas, regularize::None{}, ts,
-        physics::ArtificialViscosity{s.alpha, 2.0 * s.alpha});
-    finish(sim);
+  record(sim);
+  bool early_noted = false;
+  static_cast<examples::RunCost&>(res) = examples::run_stops(
+      sim, examples::at_times({s.periods * s.period()}),
+      [&](const auto& sm) {
+        record(sm);
+        if (!early_noted && sm.time() >= s.period()) {  // after one period: the seeded noise has spread
+          res.noise_initial = detail::transverse_noise(sm) / (s.amplitude * s.cs);
+          early_noted = true;
+        }
+        on_step(sm);
+      },
+      at_stop);
+  res.noise_final = detail::transverse_noise(sim) / (s.amplitude * s.cs);
+  res.gamma = analysis::damping_rate(res.t, res.delta_rho, s.period(), s.periods);
+  res.phase_error = analysis::phase_error(res.t, res.delta_rho, s.period());
+  std::vector<double> S(2, 0.0);
+  for (std::size_t i = 0; i < res.t.size(); ++i) {
+    const double k = std::floor(res.t[i] / s.period());
+    if (k == 0) S[0] = std::max(S[0], std::abs(res.delta_rho[i]));
+    if (k == s.periods - 1) S[1] = std::max(S[1], std::abs(res.delta_rho[i]));
   }
+  res.amplitude_growth = S[1] / S[0];
+  res.dissipated = sim.kinetic_energy_removed();
   return res;
+}
+
+/// Runs RSPH when r > 0, else plain SPH.
+template <class Kernel, class OnStep, class AtStop = examples::NoHook>
+LinearWaveResult run_linear_wave(const LinearWaveParams& s, OnStep&& on_step, AtStop&& at_stop = {}) {
+  if (s.r > 0.0) {
+    auto sim = make_rsph_wave<Kernel>(s);
+    return run_wave<Kernel>(sim, s, on_step, at_stop);
+  }
+  auto sim = make_sph_wave<Kernel>(s);
+  return run_wave<Kernel>(sim, s, on_step, at_stop);
 }
 
 }  // namespace rsph::scenes

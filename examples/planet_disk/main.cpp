@@ -1,7 +1,7 @@
 // rsph-planet-disk: a planet in a protoplanetary disk (§5, Figs. 12-18): log Sigma maps, the cuts at
 // phi = pi and r = a, the azimuthal average, the gap depth over time and the cost of each phase.
 #include "common/cli.hpp"
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "planet_disk/scene.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
@@ -168,10 +168,8 @@ int main(int argc, char** argv) {
     summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);
     summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final).set("mass_removed", r.mass_removed);
     summary.set("mass_error", r.max_mass_error).set("gap_depth", r.samples.back().gap_depth);
-    summary.set("wall_seconds", r.wall_seconds).set("cpu_seconds", ex::cpu_seconds()).set("steps", r.steps);
-    summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
-    summary.set("regularizations", r.regularizations).set("regularization_seconds", r.phases.regularization);
-    summary.set("remap_seconds", r.remap_seconds);
+    ex::write_cost(summary, r);
+    summary.set("cpu_seconds", ex::cpu_seconds()).set("remap_seconds", r.remap_seconds);
     summary.set("phase_seconds", phases).set("timeline", mass_over_time);
     summary.write(dir / "summary.json");
     fmt::print(

@@ -4,12 +4,13 @@
 // isothermal with c_s / v_K = 0.05 or polytropic (eq. 21). Gas in [0.4, 0.5] and [2.4, 2.5] moves on
 // fixed circular orbits. RSPH without artificial viscosity (h/Delta = 1.4, Appendix A's adaptive
 // regularization) or equal-mass grad-h SPH with artificial viscosity, on the same initial lattice.
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "rsph/paper/disk.hpp"
 #include "rsph/paper/keplerian_zones.hpp"
 #include "rsph/paper/star_planet.hpp"
 #include "rsph/rsph.hpp"
 
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -172,79 +173,106 @@ struct DiskRun : examples::RunCost {
 
 namespace detail {
 
+/// The measuring times: every measure_every orbits, the last at the end of the run.
+inline std::vector<examples::AtTime> disk_stops(const PlanetDiskParams& s) {
+  const double period = s.period(), t_end = s.orbits * period;
+  std::vector<examples::AtTime> stops;
+  for (int k = 1;; ++k) {
+    stops.push_back({std::min(t_end, k * s.measure_every * period)});
+    if (stops.back().t >= t_end * (1.0 - 1e-14)) return stops;
+  }
+}
+
 template <class Sim, class OnStep, class OnSample>
 DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample) {
   DiskRun r;
   r.mass_initial = sim.totals().mass;
-  r.begin(sim);
-  const double period = s.period(), t_end = s.orbits * period;
+  const double period = s.period();
+  const auto t0 = std::chrono::steady_clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
   // Gas that leaves the disk by more than a lattice spacing is gone: removed and counted.
   const double r_lo = s.r_in - s.spacing(), r_hi = s.r_out + s.spacing();
-  auto sample = [&] {
-    const double t0 = r.elapsed();
+  auto after_step = [&](Sim& sm) {
+    r.mass_removed += examples::remove_particles(
+        sm, [&](const Vec<2>& x) { return x.squaredNorm() < r_lo * r_lo || x.squaredNorm() > r_hi * r_hi; },
+        r.particles_removed);
+    on_step(sm);
+  };
+  auto sample = [&](const Sim& sm, int) {
+    const double t_sample = elapsed();
     DiskSample d;
-    d.time = sim.time();
-    d.orbit = sim.time() / period;
-    d.mass = sim.totals().mass;
+    d.time = sm.time();
+    d.orbit = sm.time() / period;
+    d.mass = sm.totals().mass;
     d.mass_removed = r.mass_removed;
-    d.gap_depth = disk_profile(sim.particles(), s).gap_depth;
-    d.particles = sim.particles().n_real;
-    d.steps = sim.steps();
-    d.regularizations = sim.regularizations();
-    d.wall_seconds = r.elapsed();
+    d.gap_depth = disk_profile(sm.particles(), s).gap_depth;
+    d.particles = sm.particles().n_real;
+    d.steps = sm.steps();
+    d.regularizations = sm.regularizations();
+    d.wall_seconds = elapsed();
     r.max_mass_error = std::max(r.max_mass_error, std::abs(d.mass + r.mass_removed - r.mass_initial) / r.mass_initial);
     r.samples.push_back(d);
-    on_sample(sim, r.samples.back());
-    r.output_seconds += r.elapsed() - t0;
+    on_sample(sm, r.samples.back());
+    r.output_seconds += elapsed() - t_sample;
   };
-  sample();
-  for (int k = 1; sim.time() < t_end * (1.0 - 1e-14); ++k) {
-    const double t_next = std::min(t_end, k * s.measure_every * period);
-    while (sim.time() < t_next * (1.0 - 1e-14)) {
-      const std::uint64_t steps_before = sim.steps();
-      sim.step(t_next - sim.time());
-      r.mass_removed += examples::remove_particles(
-          sim, [&](const Vec<2>& x) { return x.squaredNorm() < r_lo * r_lo || x.squaredNorm() > r_hi * r_hi; },
-          r.particles_removed);
-      r.count_steps(sim, steps_before);
-      on_step(sim);
-    }
-    sample();
-  }
-  r.finish(sim);
+  static_cast<examples::RunCost&>(r) = examples::run_stops(sim, disk_stops(s), after_step, sample);
   r.mass_final = sim.totals().mass;
   if constexpr (requires { sim.regularizer().log(); })
     for (const auto& record : sim.regularizer().log()) r.remap_seconds += record.seconds;
   return r;
 }
 
-template <class Lattice, class EOS, class Run>
-auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& run) {
-  using K = kernel::CubicSpline;
+}  // namespace detail
+
+/// The scene's methods: RSPH with Appendix A's schedule and the annulus closing the edge cells, and
+/// equal-mass grad-h SPH with artificial viscosity; both with the star and planet and the boundary zones.
+using DiskKernel = kernel::CubicSpline;
+template <class Lattice>
+using DiskRegularizer =
+    regularize::LatticeRegularizer<Lattice, schedule::Adaptive<DiskKernel, 2>, geometry::LocalVoronoi, region::Annulus>;
+template <class Lattice, class EOS>
+using RsphDisk = Simulation<2, DiskKernel, EOS, DiskRegularizer<Lattice>, paper::StarAndPlanet, paper::KeplerianZones>;
+template <class EOS>
+using SphDisk = Simulation<2, DiskKernel, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity,
+                           paper::StarAndPlanet, paper::KeplerianZones>;
+
+inline TimeStepParams disk_time_steps(const PlanetDiskParams& s) {
   TimeStepParams ts;
   ts.courant = s.courant;
   ts.force = s.force;
-  const auto gravity = s.star_planet();
-  const auto zones = s.zones();
+  if (s.rsph()) ts.max_bin = s.max_bin;
+  return ts;
+}
+
+template <class Lattice, class EOS>
+RsphDisk<Lattice, EOS> make_rsph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos) {
+  // Edge cells are closed at 0.75 Delta along the edge and by the disk's circles across it, and a new
+  // cell less than half covered hands its share on: the edges stay where the disk ends.
+  const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
+  DiskRegularizer<Lattice> reg(
+      lat, schedule::Adaptive<DiskKernel, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)},
+      remap, {}, region::Annulus{s.r_in, s.r_out});
+  return RsphDisk<Lattice, EOS>(disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg), disk_time_steps(s),
+                                s.star_planet(), s.zones());
+}
+
+template <class Lattice, class EOS>
+SphDisk<EOS> make_sph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos) {
+  return SphDisk<EOS>(disk_particles_on(s, lat), s.box(), std::move(eos), {}, disk_time_steps(s),
+                      physics::GradH<2>{s.h_over_dx}, physics::ArtificialViscosity{s.alpha, s.beta}, s.star_planet(),
+                      s.zones());
+}
+
+namespace detail {
+
+template <class Lattice, class EOS, class Run>
+auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& run) {
   if (s.rsph()) {
-    ts.max_bin = s.max_bin;
-    using Reg =
-        regularize::LatticeRegularizer<Lattice, schedule::Adaptive<K, 2>, geometry::LocalVoronoi, region::Annulus>;
-    // Edge cells are closed at 0.75 Delta along the edge and by the disk's circles across it, and a new
-    // cell less than half covered hands its share on: the edges stay where the disk ends.
-    const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-    Reg reg(lat, schedule::Adaptive<K, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)}, remap,
-            {}, region::Annulus{s.r_in, s.r_out});
-    Simulation<2, K, EOS, Reg, paper::StarAndPlanet, paper::KeplerianZones> sim(
-        disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg), ts, gravity, zones);
-    return run(sim);
-  } else {
-    Simulation<2, K, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity, paper::StarAndPlanet,
-               paper::KeplerianZones>
-        sim(disk_particles_on(s, lat), s.box(), std::move(eos), {}, ts, physics::GradH<2>{s.h_over_dx},
-            physics::ArtificialViscosity{s.alpha, s.beta}, gravity, zones);
+    auto sim = make_rsph_disk(s, lat, std::move(eos));
     return run(sim);
   }
+  auto sim = make_sph_disk(s, lat, std::move(eos));
+  return run(sim);
 }
 
 /// with_method on the scene's lattice.

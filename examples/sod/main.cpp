@@ -1,7 +1,7 @@
 // rsph-sod: Sod's shock tube in 1D or as a 2D strip, plain SPH or RSPH (uniform or multi-level lattice),
 // against the exact Riemann solution.
 #include "common/cli.hpp"
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
 #include "rsph/io/json.hpp"
@@ -30,33 +30,17 @@ struct Options {
 template <int D, class Kernel, class Sim>
 int run(const Options& opt, Sim sim) {
   const auto dir = ex::prepare_output(opt.common.out);
-  const auto wall0 = std::chrono::steady_clock::now();
   const analysis::ExactRiemann exact(opt.sod.left, opt.sod.right, opt.sod.gamma);
   const auto start = sim.totals();
-
   ex::ConservationLog<D> log(dir / "conservation.csv");
   log.record(sim.time(), sim.steps(), start);
+  ex::Snapshots snapshots(dir);
   io::Progress progress(fmt::format("rsph-sod {}D {}", D, opt.method), opt.sod.t_end);
-  double particle_steps = 0.0;
-  int snap = 0;
-  const int n_snap = std::max(opt.snapshots, 1);
-  auto write_snap = [&] {
-    io::write_snapshot(dir / io::snapshot_name(static_cast<std::size_t>(snap++)), sim.particles(), sim.time(),
-                       sim.steps());
-  };
-  write_snap();
-  for (int k = 1; k <= n_snap; ++k) {
-    const double t_next = opt.sod.t_end * k / n_snap;
-    sim.run_until(t_next, [&](const auto& s) {
-      particle_steps += static_cast<double>(s.particles().n_real);
-      log.record(s.time(), s.steps(), s.totals());
-      if (!opt.common.quiet) progress.update(s.time(), s.steps());
-    });
-    write_snap();
-  }
-  progress.finish();
+  const auto cost = ex::run_stops(
+      sim, ex::evenly(opt.sod.t_end, std::max(opt.snapshots, 1)),
+      [&](const auto& s) { log.record(s.time(), s.steps(), s.totals()); },
+      [&](const auto& s, int) { snapshots.write(s); }, opt.common.quiet ? nullptr : &progress);
   log.close();
-  const double wall = ex::seconds_since(wall0);
 
   const auto& p = sim.particles();
   io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});
@@ -82,23 +66,16 @@ int run(const Options& opt, Sim sim) {
   summary.set("time", sim.time()).set("L1_rho", err.L1_rho).set("L1_v", err.L1_v).set("L1_P", err.L1_P);
   summary.set("energy_error", ex::relative_change(end.total_energy(), start.total_energy()));
   summary.set("mass_error", ex::relative_change(end.mass, start.mass));
-  summary.set("wall_seconds", wall).set("steps", sim.steps());
-  summary.set("particle_updates_per_second", static_cast<double>(sim.particle_updates()) / wall);
-  summary.set("regularization_seconds", sim.phase_times().regularization);
-  summary.set("phase_seconds", ex::phase_json(sim.phase_times()));
   summary.set("p_star_exact", exact.p_star()).set("v_star_exact", exact.v_star());
-  summary.set("mean_particles", particle_steps / static_cast<double>(std::max<std::uint64_t>(sim.steps(), 1)));
-  if constexpr (requires { sim.regularizer().log(); }) {
-    summary.set("regularizations", sim.regularizations());
-    summary.set("levels", ex::level_counts(sim.regularizer().log(), sim.steps()));
+  ex::write_cost(summary, cost);
+  ex::write_scheme(summary, sim);
+  if constexpr (requires { sim.regularizer().log(); })
     summary.set("max_level", opt.rsph.refinement.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
-  }
-  ex::GradientSolves::of(sim).write_to(summary);
   summary.write(dir / "summary.json");
   fmt::print(
       "rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
       "energy error {:.2e}\n  output: {}\n",
-      D, p.n_real, sim.steps(), wall, err.L1_rho, err.L1_v, err.L1_P,
+      D, p.n_real, sim.steps(), cost.wall_seconds, err.L1_rho, err.L1_v, err.L1_P,
       ex::relative_change(end.total_energy(), start.total_energy()), dir.string());
   return 0;
 }

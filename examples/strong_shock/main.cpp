@@ -1,6 +1,6 @@
 // rsph-strong-shock: the Xiao (2004) tube with pressure ratio 1e10 (§3.2, Fig. 4), RSPH or plain SPH.
 #include "common/cli.hpp"
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
 #include "rsph/io/json.hpp"
@@ -40,8 +40,13 @@ int main(int argc, char** argv) {
                    "Usage: rsph-strong-shock --method rsph|sph [--alpha 2 --beta 4] [--out DIR]"))
       return 0;
     if (ex::quick_preset(common)) {
-      if (vm["nx"].defaulted()) s.nx = 256;
-      if (vm["ny"].defaulted()) s.ny = 6;
+      // on levels, the quick lattice is rounded up to whole blocks of finest cells
+      const auto blocks = [&](int n) {
+        const auto fine = static_cast<int>(s.refinement.fine_cells_per_block());
+        return s.refinement.levels > 0 ? (n + fine - 1) / fine * fine : n;
+      };
+      if (vm["nx"].defaulted()) s.nx = blocks(256);
+      if (vm["ny"].defaulted()) s.ny = blocks(6);
       if (vm["sph-left"].defaulted()) s.sph_nx_left = 400;
       if (vm["sph-left-rows"].defaulted()) s.sph_ny_left = 16;
       if (vm["sph-right"].defaulted()) s.sph_nx_right = 50;
@@ -54,13 +59,10 @@ int main(int argc, char** argv) {
     auto on_step = [&](const auto& sim) {
       if (!common.quiet) progress.update(sim.time(), sim.steps());
     };
-    io::Json levels;
-    ex::GradientSolves gradient;
+    io::Json scheme;
     auto on_end = [&](const auto& sim) {
       io::write_snapshot(dir / io::snapshot_name(0), sim.particles(), sim.time(), sim.steps());
-      if constexpr (requires { sim.regularizer().lattice().max_level; })
-        levels = ex::level_counts(sim.regularizer().log(), sim.steps());
-      gradient = ex::GradientSolves::of(sim);
+      ex::write_scheme(scheme, sim);
     };
     scenes::ShockRun r;
     if (method == "rsph" && s.refinement.levels > 0)
@@ -86,21 +88,19 @@ int main(int argc, char** argv) {
     ex_csv.close();
     io::Json summary;
     summary.set("test", "strong_shock").set("method", method).set("alpha", s.alpha).set("beta", s.beta);
-    summary.set("particles", r.particles).set("mean_particles", r.mean_particles);
+    summary.set("particles", r.particles_final);
     summary.set("L1_rho", r.errors.L1_rho).set("L1_v", r.errors.L1_v).set("L1_P", r.errors.L1_P);
     summary.set("shock_position", r.shock_position).set("shock_position_exact", r.shock_position_exact);
     summary.set("contact_position_exact", r.contact_exact).set("penetration_fraction", r.penetration);
-    summary.set("energy_error", r.energy_error).set("wall_seconds", r.wall_seconds).set("steps", r.steps);
-    summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
-    summary.set("regularizations", r.regularizations).set("regularization_seconds", r.regularization_seconds);
+    summary.set("energy_error", r.energy_error);
+    ex::write_cost(summary, r);
+    summary.merge(scheme);
     if (method == "rsph") summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels));
-    if (method == "rsph" && s.refinement.levels > 0) summary.set("levels", levels);  // none on a uniform lattice
-    gradient.write_to(summary);
     summary.write(dir / "summary.json");
     fmt::print(
         "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"
         "  L1(rho) = {:.4g}, L1(v) = {:.4g}; shock at {:.4f} (exact {:.4f}); penetration {:.3f}; energy error {:.2e}\n",
-        method, s.alpha, s.beta, r.particles, r.steps, r.regularizations, r.wall_seconds, r.errors.L1_rho,
+        method, s.alpha, s.beta, r.particles_final, r.steps, r.regularizations, r.wall_seconds, r.errors.L1_rho,
         r.errors.L1_v, r.shock_position, r.shock_position_exact, r.penetration, r.energy_error);
     return 0;
   });

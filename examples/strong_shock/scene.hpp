@@ -3,6 +3,7 @@
 // periodic in y with walls at x = 0 and 1. RSPH (h/Delta = 2, adaptive regularization of Appendix A)
 // against plain SPH (grad-h, Monaghan-Gingold viscosity).
 #include "common/levels.hpp"
+#include "common/runner.hpp"
 #include "rsph/rsph.hpp"
 
 #include <algorithm>
@@ -49,15 +50,13 @@ struct StrongShockParams {
   double strip_width_sph() const { return 0.5 * sph_ny_left / sph_nx_left; }
 };
 
-/// What a run leaves for the report.
-struct ShockRun {
+/// What a run leaves for the report, beside its cost.
+struct ShockRun : examples::RunCost {
   std::vector<double> x, y, rho, v, P, u, h;
   analysis::ShockTubeErrors errors;
   double shock_position = 0.0, shock_position_exact = 0.0, contact_exact = 0.0;
   double penetration = 0.0;  ///< fraction of particles beyond contact + 2h that carry left-state gas
-  double energy_error = 0.0, wall_seconds = 0.0, regularization_seconds = 0.0;
-  std::uint64_t steps = 0, updates = 0, regularizations = 0, particles = 0;
-  double mean_particles = 0.0;
+  double energy_error = 0.0;
 };
 
 namespace detail {
@@ -92,10 +91,10 @@ double shock_position(const P& p, double threshold, double bin) {
   return 0.0;
 }
 
+/// The measures of the final state: errors against the exact solution, shock position, penetration.
 template <class Sim>
-ShockRun finish(Sim& sim, const StrongShockParams& s, double wall0_seconds) {
+void measure(const Sim& sim, const StrongShockParams& s, ShockRun& r) {
   const analysis::ExactRiemann exact(s.left, s.right, s.gamma);
-  ShockRun r;
   const auto& p = sim.particles();
   for (std::size_t a = 0; a < p.n_real; ++a) {
     r.x.push_back(p.x[a][0]);
@@ -125,13 +124,6 @@ ShockRun finish(Sim& sim, const StrongShockParams& s, double wall0_seconds) {
     if (std::abs(lu - uL) < std::abs(lu - uR)) ++left_state;
   }
   r.penetration = beyond ? static_cast<double>(left_state) / static_cast<double>(beyond) : 0.0;
-  r.steps = sim.steps();
-  r.updates = sim.particle_updates();
-  r.regularizations = sim.regularizations();
-  r.regularization_seconds = sim.phase_times().regularization;
-  r.particles = p.n_real;
-  r.wall_seconds = wall0_seconds;
-  return r;
 }
 
 }  // namespace detail
@@ -208,21 +200,17 @@ inline SphShock make_sph_shock(const StrongShockParams& s) {
                   physics::GradH<2>{s.eta});
 }
 
-/// Runs either simulation to t_end; on_step(sim) after each step, on_end(sim) once at the end.
+/// Runs any of the simulations to t_end (examples::run_stops); on_step(sim) after each step, on_end(sim) once
+/// at the end.
 template <class Sim, class OnStep, class OnEnd>
 ShockRun run_shock(Sim sim, const StrongShockParams& s, OnStep&& on_step, OnEnd&& on_end) {
-  const auto t0 = std::chrono::steady_clock::now();
   const double E0 = sim.totals().total_energy();
-  double particle_sum = 0.0;
-  sim.run_until(s.t_end, [&](const auto& sm) {
-    particle_sum += static_cast<double>(sm.particles().n_real);
-    on_step(sm);
-  });
-  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ShockRun r;
+  static_cast<examples::RunCost&>(r) =
+      examples::run_stops(sim, examples::at_times({s.t_end}), on_step, examples::NoHook{});
   on_end(sim);
-  ShockRun r = detail::finish(sim, s, wall);
+  detail::measure(sim, s, r);
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
-  r.mean_particles = particle_sum / static_cast<double>(std::max<std::uint64_t>(sim.steps(), 1));
   return r;
 }
 

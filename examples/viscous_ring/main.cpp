@@ -1,7 +1,7 @@
 // rsph-viscous-ring: the viscously spreading ring (§4, Figs. 6-11) and the effective viscosity nu_eff
 // that regularization adds to the prescribed nu_s.
 #include "common/cli.hpp"
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
 #include "rsph/io/json.hpp"
@@ -114,10 +114,8 @@ int main(int argc, char** argv) {
     summary.set("mass_error", r.max_mass_error);
     summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
     summary.set("particles_mean", r.mean_particles);
-    summary.set("wall_seconds", r.wall_seconds).set("cpu_seconds", ex::cpu_seconds()).set("steps", r.steps);
-    summary.set("particle_updates_per_second", static_cast<double>(r.updates) / r.wall_seconds);
-    summary.set("regularizations", r.regularizations).set("regularization_seconds", r.phases.regularization);
-    summary.set("phase_seconds", ex::phase_json(r.phases)).set("snapshots", snaps);
+    ex::write_cost(summary, r);
+    summary.set("cpu_seconds", ex::cpu_seconds()).set("snapshots", snaps);
     summary.write(dir / "summary.json");
     fmt::print(
         "rsph-viscous-ring c_r = {} x {}, h/Delta = {}, h = {}: {} particles, {} steps, {} regularizations, {:.1f} s; "

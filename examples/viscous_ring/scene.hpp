@@ -4,7 +4,7 @@
 // the annulus where Sigma(tau*_0 = 0.018) is above a floor, with masses from eq. (16) and velocities
 // from eqs. (17)-(18); snapshots at the paper's tau*, each fitted by eq. (16) for an effective
 // viscous time and so an effective viscosity nu_eff.
-#include "common/run_helpers.hpp"
+#include "common/runner.hpp"
 #include "rsph/paper/viscous_ring.hpp"
 #include "rsph/rsph.hpp"
 
@@ -176,28 +176,27 @@ template <class Sim, class OnStep, class OnSnapshot>
 RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
   RingRun r;
   r.mass_initial = sim.totals().mass;
-  r.begin(sim);
-  on_snapshot(sim, -1);
-  for (std::size_t k = 0; k < s.taus.size(); ++k) {
-    const double t_snap = s.time_of(s.taus[k]);
-    while (sim.time() < t_snap * (1.0 - 1e-14)) {
-      const std::uint64_t steps_before = sim.steps();
-      sim.step(t_snap - sim.time());
-      r.mass_accreted += examples::remove_particles(
-          sim, [r2 = s.inner_radius * s.inner_radius](const Vec<2>& x) { return x.squaredNorm() < r2; },
-          r.particles_accreted);
-      r.count_steps(sim, steps_before);
-      on_step(sim);
+  std::vector<double> times;
+  for (const double tau : s.taus) times.push_back(s.time_of(tau));
+  auto after_step = [&](Sim& sm) {  // gas inside the inner radius is accreted
+    r.mass_accreted += examples::remove_particles(
+        sm, [r2 = s.inner_radius * s.inner_radius](const Vec<2>& x) { return x.squaredNorm() < r2; },
+        r.particles_accreted);
+    on_step(sm);
+  };
+  auto at_snapshot = [&](const Sim& sm, int k) {
+    if (k >= 0) {
+      const double mass = sm.totals().mass;
+      r.max_mass_error = std::max(r.max_mass_error, std::abs(mass + r.mass_accreted - r.mass_initial) / r.mass_initial);
+      auto snap =
+          measure_ring(s, s.taus[static_cast<std::size_t>(k)], sm.time(), ring_profile(sm.particles(), s.bin_width));
+      snap.mass = mass;
+      snap.particles = sm.particles().n_real;
+      r.snapshots.push_back(std::move(snap));
     }
-    const double mass = sim.totals().mass;
-    r.max_mass_error = std::max(r.max_mass_error, std::abs(mass + r.mass_accreted - r.mass_initial) / r.mass_initial);
-    auto snap = measure_ring(s, s.taus[k], sim.time(), ring_profile(sim.particles(), s.bin_width));
-    snap.mass = mass;
-    snap.particles = sim.particles().n_real;
-    r.snapshots.push_back(std::move(snap));
-    on_snapshot(sim, static_cast<int>(k));
-  }
-  r.finish(sim);
+    on_snapshot(sm, k);
+  };
+  static_cast<examples::RunCost&>(r) = examples::run_stops(sim, examples::at_times(times), after_step, at_snapshot);
   r.mass_final = sim.totals().mass;
   double sum = 0.0, noise = 0.0;
   r.nu_eff_min = std::numeric_limits<double>::infinity();
@@ -215,40 +214,66 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
 
 }  // namespace detail
 
-namespace detail {
-template <class Lattice, class OnStep, class OnSnapshot>
-RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnStep&& on_step,
-                            OnSnapshot&& on_snapshot) {
-  using K = kernel::CubicSpline;
-  using MG = physics::ShearViscosityMG<K, 2>;
-  using NS = physics::NavierStokesViscosity<2>;
-  using Reg = regularize::LatticeRegularizer<Lattice, schedule::EveryNSteps>;
+/// The scene's methods: RSPH regularized every c_r cycles on a square or hexagonal lattice, and plain SPH
+/// (c_r = 0), each with Monaghan-Gingold or Navier-Stokes viscosity, about a point-mass star.
+using RingKernel = kernel::CubicSpline;
+template <class Lattice>
+using RingRegularizer = regularize::LatticeRegularizer<Lattice, schedule::EveryNSteps>;
+template <class Lattice, class Viscosity>
+using RsphRing =
+    Simulation<2, RingKernel, eos::Pressureless, RingRegularizer<Lattice>, Viscosity, physics::PointMass<2>>;
+template <class Viscosity>
+using SphRing = Simulation<2, RingKernel, eos::Pressureless, regularize::None, Viscosity, physics::PointMass<2>>;
+
+/// The time-step parameters; individual steps only with the MG viscosity (a stress term needs one step).
+template <class Viscosity>
+TimeStepParams ring_time_steps(const ViscousRingParams& s) {
   TimeStepParams ts;
   ts.force = s.force;
-  const physics::PointMass<2> star{1.0, Vec<2>::Zero(), 0.0};
+  if constexpr (!StressTerm<Viscosity, 2>) ts.max_bin = s.max_bin;
+  return ts;
+}
+
+/// The viscosity of the scene on the particles' lattice (the MG operator's strength depends on it).
+template <class Viscosity, class Lattice>
+Viscosity ring_viscosity(const ViscousRingParams& s) {
+  if constexpr (StressTerm<Viscosity, 2>)
+    return Viscosity{s.nu};
+  else if constexpr (std::is_same_v<Lattice, lattice::Hexagonal>)
+    return Viscosity::on_hexagonal_lattice(s.nu, s.h_over_dx);
+  else
+    return Viscosity::on_square_lattice(s.nu, s.h_over_dx);
+}
+
+template <class Viscosity, class Lattice>
+RsphRing<Lattice, Viscosity> make_rsph_ring(const ViscousRingParams& s, const Lattice& lat) {
   // Open edges: an edge cell closed at 0.75 Delta has about one lattice cell's area, and a new cell
   // less than half covered hands its share to its neighbour, so the edge follows the gas rather
   // than creeping outwards by a closing radius at every regularization; cells with less than 1e-6 of
   // the largest mass join their neighbours, so the far tails (Sigma ~ 1e-6 of its peak) cost nothing.
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-  const auto reg = Reg(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit}, remap);
-  auto run = [&](auto&& sim) { return run_ring(sim, s, on_step, on_snapshot); };
-  if (s.viscosity == "ns") {
-    if (s.cycle > 0)
-      return run(Simulation<2, K, eos::Pressureless, Reg, NS, physics::PointMass<2>>(ring_particles_on(s, lat), s.box(),
-                                                                                     {}, reg, ts, NS{s.nu}, star));
-    return run(Simulation<2, K, eos::Pressureless, regularize::None, NS, physics::PointMass<2>>(
-        ring_particles_on(s, lat), s.box(), {}, {}, ts, NS{s.nu}, star));
-  }
-  ts.max_bin = s.max_bin;
-  // the MG operator's strength on the particles' lattice
-  const MG mg = std::is_same_v<Lattice, lattice::Hexagonal> ? MG::on_hexagonal_lattice(s.nu, s.h_over_dx)
-                                                            : MG::on_square_lattice(s.nu, s.h_over_dx);
-  if (s.cycle > 0)
-    return run(Simulation<2, K, eos::Pressureless, Reg, MG, physics::PointMass<2>>(ring_particles_on(s, lat), s.box(),
-                                                                                   {}, reg, ts, mg, star));
-  return run(Simulation<2, K, eos::Pressureless, regularize::None, MG, physics::PointMass<2>>(
-      ring_particles_on(s, lat), s.box(), {}, {}, ts, mg, star));
+  return RsphRing<Lattice, Viscosity>(
+      ring_particles_on(s, lat), s.box(), {},
+      RingRegularizer<Lattice>(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit}, remap),
+      ring_time_steps<Viscosity>(s), ring_viscosity<Viscosity, Lattice>(s),
+      physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
+}
+
+template <class Viscosity, class Lattice>
+SphRing<Viscosity> make_sph_ring(const ViscousRingParams& s, const Lattice& lat) {
+  return SphRing<Viscosity>(ring_particles_on(s, lat), s.box(), {}, {}, ring_time_steps<Viscosity>(s),
+                            ring_viscosity<Viscosity, Lattice>(s), physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
+}
+
+namespace detail {
+template <class Lattice, class OnStep, class OnSnapshot>
+RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnStep&& on_step,
+                            OnSnapshot&& on_snapshot) {
+  using MG = physics::ShearViscosityMG<RingKernel, 2>;
+  using NS = physics::NavierStokesViscosity<2>;
+  auto run = [&](auto sim) { return run_ring(sim, s, on_step, on_snapshot); };
+  if (s.viscosity == "ns") return s.cycle > 0 ? run(make_rsph_ring<NS>(s, lat)) : run(make_sph_ring<NS>(s, lat));
+  return s.cycle > 0 ? run(make_rsph_ring<MG>(s, lat)) : run(make_sph_ring<MG>(s, lat));
 }
 }  // namespace detail
 

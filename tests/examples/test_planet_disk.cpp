@@ -50,14 +50,12 @@ TEST_CASE("Keplerian zones turn their members exactly and leave the disk between
 
 TEST_CASE("the wake of linear theory trails outside the orbit and leads inside", "[examples][disk][analysis]") {
   CHECK(paper::wake_azimuth(1.0, 1.0, 0.05) == 0.0);
-  CHECK(paper::wake_azimuth(2.0, 1.0, 0.05) ==
-        Approx((std::log(2.0) - 2.0 / 3.0 * (std::pow(2.0, 1.5) - 1.0)) / 0.05));
+  CHECK(paper::wake_azimuth(2.0, 1.0, 0.05) == Approx((std::log(2.0) - 2.0 / 3.0 * (std::pow(2.0, 1.5) - 1.0)) / 0.05));
   CHECK(paper::wake_azimuth(2.0, 1.0, 0.05) < -10.0);
   CHECK(paper::wake_azimuth(0.5, 1.0, 0.05) > 5.0);
   // dphi/dr = sgn(r - a) (Omega - Omega_p) / c_s
   for (double r : {0.6, 1.5, 2.2}) {
-    const double slope =
-        (paper::wake_azimuth(r + 1e-6, 1.0, 0.05) - paper::wake_azimuth(r - 1e-6, 1.0, 0.05)) / 2e-6;
+    const double slope = (paper::wake_azimuth(r + 1e-6, 1.0, 0.05) - paper::wake_azimuth(r - 1e-6, 1.0, 0.05)) / 2e-6;
     const double expect = (r > 1.0 ? 1.0 : -1.0) * (std::pow(r, -1.5) - 1.0) / (0.05 / std::sqrt(r));
     CHECK(slope == Approx(expect).epsilon(1e-6));
   }

@@ -19,8 +19,7 @@ TEST_CASE("strong shock, pressure ratio 1e10: RSPH keeps the shock in place and 
   scenes::StrongShockParams s;
   s.nx = 256;
   s.ny = 6;
-  const auto r = scenes::run_shock(
-      scenes::make_rsph_shock(s), s, [](const auto&) {}, [](const auto&) {});
+  const auto r = scenes::run_shock(scenes::make_rsph_shock(s), s, examples::NoHook{}, examples::NoHook{});
   INFO("shock " << r.shock_position << " vs " << r.shock_position_exact << ", energy error " << r.energy_error
                 << ", L1(rho) " << r.errors.L1_rho << ", regularizations " << r.regularizations);
   check_physical(r);
@@ -38,8 +37,7 @@ TEST_CASE("strong shock: plain SPH with alpha = 1 runs, conserves energy, and it
   s.sph_ny_left = 12;
   s.sph_nx_right = 50;
   s.sph_ny_right = 2;
-  const auto r = scenes::run_shock(
-      scenes::make_sph_shock(s), s, [](const auto&) {}, [](const auto&) {});
+  const auto r = scenes::run_shock(scenes::make_sph_shock(s), s, examples::NoHook{}, examples::NoHook{});
   INFO("SPH: shock " << r.shock_position << " vs " << r.shock_position_exact << ", penetration " << r.penetration
                      << ", L1(rho) " << r.errors.L1_rho);
   check_physical(r);
@@ -57,14 +55,12 @@ TEST_CASE("strong shock on levels in factors of two: fewer particles, shock in p
   s.refinement.levels = 2;
   s.refinement.refine_above = 0.03;
   s.refinement.coarsen_below = 0.01;
-  const auto levels = scenes::run_shock(
-      scenes::make_rsph_levels_shock(s), s, [](const auto&) {}, [](const auto&) {});
+  const auto levels = scenes::run_shock(scenes::make_rsph_levels_shock(s), s, examples::NoHook{}, examples::NoHook{});
   auto uniform_run = [](int nx, int ny) {
     scenes::StrongShockParams u;
     u.nx = nx;
     u.ny = ny;
-    return scenes::run_shock(
-        scenes::make_rsph_shock(u), u, [](const auto&) {}, [](const auto&) {});
+    return scenes::run_shock(scenes::make_rsph_shock(u), u, examples::NoHook{}, examples::NoHook{});
   };
   const auto fine = uniform_run(512, 8), coarse = uniform_run(256, 4);  // both 1/64 wide
   INFO("levels 0-2: " << levels.mean_particles << " particles on average, L1(rho) " << levels.errors.L1_rho

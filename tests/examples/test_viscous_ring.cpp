@@ -86,7 +86,7 @@ TEST_CASE("viscous ring on a hexagonal lattice: regularization conserves mass an
   INFO("nu_eff / nu_s: square " << square.nu_eff / 2e-3 << ", hexagonal " << hexagonal.nu_eff / 2e-3 << "; noise "
                                 << square.noise_error << ", " << hexagonal.noise_error);
   CHECK(hexagonal.max_mass_error < 1e-12);
-  CHECK(hexagonal.regularizations > 20);  // every 4 steps, as the square run (45)
+  CHECK(hexagonal.regularizations > 20);                          // every 4 steps, as the square run (45)
   CHECK(hexagonal.particles_initial > square.particles_initial);  // 2/sqrt(3) times the sites at the same h/Delta
   CHECK(hexagonal.nu_eff / 2e-3 > 0.8);
   CHECK(hexagonal.nu_eff / 2e-3 < 2.0);

@@ -61,6 +61,12 @@ class Json {
     return raw(key, s + (items.empty() ? "]" : "\n]"));
   }
 
+  /// Every entry of `other`, in its order (a key already here takes the new value in its place).
+  Json& merge(const Json& other) {
+    for (const auto& [key, value] : other.entries_) raw(key, value);
+    return *this;
+  }
+
   /// Pretty-printed with two-space indentation; nested objects are shifted to their depth.
   std::string dump() const {
     if (entries_.empty()) return "{}";

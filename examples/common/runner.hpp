@@ -1,0 +1,123 @@
+#pragma once
+// The one run loop every example and its tests drive: a simulation stepped through a sequence of stops
+// (simulated times, or regularization counts), with a hook after each step (a sensor, particles
+// leaving the domain, the conservation log), a hook at the start and at each stop (snapshots, measures),
+// the cost recorded the same way for all, and a progress line. The figures every summary.json carries
+// are written by one function too.
+#include "common/run_helpers.hpp"
+#include "rsph/io/hdf5_snapshot.hpp"
+#include "rsph/io/json.hpp"
+#include "rsph/io/progress.hpp"
+
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <string>
+#include <vector>
+
+namespace rsph::examples {
+
+/// A stop at simulated time t: the last step is shortened to land on it.
+struct AtTime {
+  double t;
+  template <class Sim>
+  bool reached(const Sim& sim) const {
+    return sim.time() >= t * (1.0 - 1e-14);
+  }
+  template <class Sim>
+  double dt_limit(const Sim& sim) const {
+    return t - sim.time();
+  }
+};
+
+/// A stop once the simulation has regularized n times (steps are not shortened).
+struct AfterRegularizations {
+  std::uint64_t n;
+  template <class Sim>
+  bool reached(const Sim& sim) const {
+    return sim.regularizations() >= n;
+  }
+  template <class Sim>
+  double dt_limit(const Sim&) const {
+    return std::numeric_limits<double>::infinity();
+  }
+};
+
+/// Stops at the given times, ascending.
+inline std::vector<AtTime> at_times(const std::vector<double>& times) {
+  std::vector<AtTime> stops;
+  for (const double t : times) stops.push_back({t});
+  return stops;
+}
+
+/// n stops evenly spaced in (0, t_end], the last at t_end.
+inline std::vector<AtTime> evenly(double t_end, int n) {
+  std::vector<AtTime> stops;
+  for (int k = 1; k <= n; ++k) stops.push_back({t_end * k / n});
+  return stops;
+}
+
+/// Hooks that do nothing, for a run that needs none.
+struct NoHook {
+  template <class... A>
+  void operator()(A&&...) const {}
+};
+
+/// Steps `sim` through `stops` in turn. after_step(sim) follows every call of step() (a block of
+/// individual steps is one call); at_stop(sim, k) comes at the start (k = -1) and at each stop k. The
+/// progress line, when given, shows simulated time. Returns what the run cost.
+template <class Sim, class Stop, class AfterStep, class AtStop>
+RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_step, AtStop&& at_stop,
+                  io::Progress* progress = nullptr) {
+  RunCost cost;
+  cost.begin(sim);
+  at_stop(sim, -1);
+  for (std::size_t k = 0; k < stops.size(); ++k) {
+    while (!stops[k].reached(sim)) {
+      const std::uint64_t steps_before = sim.steps();
+      sim.step(stops[k].dt_limit(sim));
+      after_step(sim);
+      cost.count_steps(sim, steps_before);
+      if (progress) progress->update(sim.time(), sim.steps());
+    }
+    at_stop(sim, static_cast<int>(k));
+  }
+  cost.finish(sim);
+  if (progress) progress->finish();
+  return cost;
+}
+
+/// The snapshots of a run in `dir`: snap_00000.h5, snap_00001.h5, ... in the order written.
+class Snapshots {
+ public:
+  explicit Snapshots(std::filesystem::path dir) : dir_(std::move(dir)) {}
+  template <class Sim>
+  void write(const Sim& sim) {
+    io::write_snapshot(dir_ / io::snapshot_name(next_++), sim.particles(), sim.time(), sim.steps());
+  }
+
+ private:
+  std::filesystem::path dir_;
+  std::size_t next_ = 0;
+};
+
+/// The figures of a run's cost that every summary.json carries: wall seconds, steps, particle updates per
+/// second, the mean particle count, regularizations and their seconds, seconds per phase.
+inline void write_cost(io::Json& summary, const RunCost& cost) {
+  summary.set("wall_seconds", cost.wall_seconds).set("steps", cost.steps);
+  summary.set("particle_updates_per_second", static_cast<double>(cost.updates) / cost.wall_seconds);
+  summary.set("mean_particles", cost.mean_particles);
+  summary.set("regularizations", cost.regularizations).set("regularization_seconds", cost.phases.regularization);
+  summary.set("phase_seconds", phase_json(cost.phases));
+}
+
+/// What the scheme of `sim` did, where it has it: the level counts of a multi-level lattice and the
+/// consistent-gradient solves.
+template <class Sim>
+void write_scheme(io::Json& summary, const Sim& sim) {
+  if constexpr (requires { sim.regularizer().lattice().max_level; })
+    summary.set("levels", level_counts(sim.regularizer().log(), sim.steps()));
+  GradientSolves::of(sim).write_to(summary);
+}
+
+}  // namespace rsph::examples
