@@ -8,6 +8,7 @@
 #include <boost/program_options.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <ctime>
 #include <exception>
@@ -16,6 +17,7 @@
 #include <sstream>
 #include <string>
 #include <type_traits>
+#include <vector>
 #ifdef _OPENMP
 #include <omp.h>
 #endif
@@ -39,6 +41,24 @@ template <class T>
 po::typed_value<T>* value_of(T& field) {
   return po::value(&field)->default_value(field, default_text(field));
 }
+
+/// Adds flags one per call, each bound to a field and defaulting to its value:
+/// `flag("cells", s.cells, "lattice cells")("h-over-dx", s.h_over_dx, "h / Delta")`. A bool field is a switch.
+class Flags {
+ public:
+  explicit Flags(po::options_description& desc) : desc_(desc) {}
+  template <class T>
+  Flags& operator()(const char* name, T& field, const char* help) {
+    if constexpr (std::is_same_v<T, bool>)
+      desc_.add_options()(name, po::bool_switch(&field), help);
+    else
+      desc_.add_options()(name, value_of(field), help);
+    return *this;
+  }
+
+ private:
+  po::options_description& desc_;
+};
 
 /// Flags every example has.
 struct CommonOptions {
@@ -85,6 +105,27 @@ inline bool parse(int argc, char** argv, const po::options_description& desc, po
   return true;
 }
 
+/// A comma-separated list of finite numbers given to flag `what`; anything else is an input error.
+inline std::vector<double> parse_numbers(const std::string& text, const char* what) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    std::size_t used = 0;
+    double x = 0.0;
+    try {
+      x = std::stod(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || item.find_first_not_of(" ", used) != std::string::npos || !std::isfinite(x))
+      throw InputError(std::string(what) + ": '" + item + "' is not a finite number");
+    out.push_back(x);
+  }
+  require(!out.empty(), std::string(what) + ": the list is empty");
+  return out;
+}
+
 /// Whether --preset asked for the quick run; an unknown preset is an input error.
 inline bool quick_preset(const CommonOptions& common) {
   if (common.preset != "quick" && common.preset != "paper")
@@ -127,6 +168,16 @@ inline int guarded_main(const char* program, const std::function<int()>& body) {
     fmt::print(stderr, "{}: error: {}\n", program, e.what());
     return 4;
   }
+}
+
+/// A program's main: parse(argc, argv) gives the options, or none after --help; run(options) does the work.
+/// Errors become one message and an exit code (guarded_main).
+template <class Parse, class Run>
+int run_program(const char* program, int argc, char** argv, Parse&& parse, Run&& run) {
+  return guarded_main(program, [&] {
+    const auto options = parse(argc, argv);
+    return options ? run(*options) : 0;
+  });
 }
 
 /// CPU seconds used by this process so far (all threads): robust against other load on the machine.

@@ -8,6 +8,8 @@
 
 #include <fmt/format.h>
 
+#include <optional>
+
 #include <sstream>
 
 using namespace rsph;
@@ -15,105 +17,102 @@ namespace ex = rsph::examples;
 
 namespace {
 
-std::vector<double> parse_list(const std::string& text, const char* what) {
-  std::vector<double> out;
-  std::stringstream ss(text);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    try {
-      out.push_back(std::stod(item));
-    } catch (const std::exception&) {
-      throw InputError(std::string(what) + ": '" + item + "' is not a number");
-    }
+struct Options {
+  scenes::DriftingPulseParams base;
+  ex::CommonOptions common;
+  std::string shifts_text = "0.01,0.1,0.5,1.0";
+  std::string counts_text = "0,100,200,300,400";
+};
+
+/// The options from the command line, or none when --help was asked for.
+std::optional<Options> parse_options(int argc, char** argv) {
+  Options opt;
+  auto& [base, common, shifts_text, counts_text] = opt;
+  ex::po::options_description desc("rsph-drifting-pulse options");
+  ex::add_common_options(desc, common);
+  ex::Flags flag(desc);
+  flag("shifts", shifts_text, "cases: T_reg v_d / Delta, comma separated");
+  flag("counts", counts_text, "regularization counts to record");
+  flag("cells", base.cells, "lattice sites on the periodic line");
+  flag("pulse-width", base.pulse_width, "pulse width in spacings");
+  flag("contrast", base.contrast, "pulse density over the background");
+  flag("h-over-dx", base.h_over_dx, "h / Delta");
+  ex::po::variables_map vm;
+  if (!ex::parse(
+          argc, argv, desc, vm,
+          "rsph-drifting-pulse: a square pulse drifting through a periodic 1D lattice, regularized every T_reg.\n"
+          "Usage: rsph-drifting-pulse [--shifts 0.01,0.1,0.5,1.0] [--counts 0,100,...] [--out DIR]"))
+    return std::nullopt;
+  if (ex::quick_preset(common)) {
+    if (vm["counts"].defaulted()) counts_text = "0,10,20,30,40";
   }
-  require(!out.empty(), std::string(what) + ": the list is empty");
-  return out;
+  return opt;
+}
+
+int run(Options opt) {
+  auto& [base, common, shifts_text, counts_text] = opt;
+  ex::apply_threads(common.threads);
+  const auto shifts = ex::parse_numbers(shifts_text, "--shifts");
+  std::vector<int> counts;
+  for (double c : ex::parse_numbers(counts_text, "--counts")) {
+    require(c >= 0 && c == std::floor(c), "--counts: regularization counts must be whole numbers >= 0");
+    counts.push_back(static_cast<int>(c));
+  }
+  std::sort(counts.begin(), counts.end());
+  base.validate();
+  const auto dir = ex::prepare_output(common.out);
+  const auto wall0 = std::chrono::steady_clock::now();
+  io::Json summary, cases;
+  summary.set("test", "drifting_pulse").set("cells", base.cells).set("h_over_dx", base.h_over_dx);
+  std::uint64_t steps = 0, updates = 0;
+  double reg_seconds = 0.0;
+  io::CsvWriter widths(dir / "widths.csv", {"shift", "regularizations", "width_mass"});
+  for (double shift : shifts) {
+    auto s = base;
+    s.shift = shift;
+    auto sim = scenes::make_drifting_pulse(s);
+    const double m0 = sim.totals().mass;
+    const std::string tag = fmt::format("{:g}", shift);
+    const auto case_dir = dir / ("shift_" + tag);
+    io::ensure_directory(case_dir);
+    io::Json width_json;
+    std::vector<ex::AfterRegularizations> stops;
+    for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
+    ex::Snapshots snapshots(case_dir);
+    const auto cost = ex::run_stops(sim, stops, ex::NoHook{}, [&](const auto& sm, int k) {
+      if (k < 0) return;
+      const int count = counts[static_cast<std::size_t>(k)];
+      const auto x = scenes::comoving_positions(sm, s.v_drift);
+      const auto& p = sm.particles();
+      io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
+      for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
+      csv.close();
+      snapshots.write(sm);
+      const double w = scenes::pulse_width_mass(sm, s);
+      width_json.set(std::to_string(count), w);
+      widths.row({shift, static_cast<double>(count), w});
+    });
+    const double mass_error = ex::relative_change(sim.totals().mass, m0);
+    io::Json c;
+    c.set("width_mass", width_json).set("mass_error", mass_error).set("regularizations", sim.regularizations());
+    c.set("kinetic_energy_dissipated", sim.kinetic_energy_removed());
+    cases.set(tag, c);
+    steps += cost.steps;
+    updates += cost.updates;
+    reg_seconds += cost.phases.regularization;
+    fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", tag, counts.back(),
+               scenes::pulse_width_mass(sim, s), mass_error);
+  }
+  widths.close();
+  const double wall = ex::seconds_since(wall0);
+  summary.set("cases", cases).set("wall_seconds", wall).set("steps", steps);
+  summary.set("particle_updates_per_second", static_cast<double>(updates) / wall);
+  summary.set("regularization_seconds", reg_seconds);
+  summary.write(dir / "summary.json");
+  fmt::print("output: {}\n", dir.string());
+  return 0;
 }
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  return ex::guarded_main("rsph-drifting-pulse", [&] {
-    scenes::DriftingPulseParams base;
-    ex::CommonOptions common;
-    std::string shifts_text = "0.01,0.1,0.5,1.0";
-    std::string counts_text = "0,100,200,300,400";
-    ex::po::options_description desc("rsph-drifting-pulse options");
-    ex::add_common_options(desc, common);
-    desc.add_options()("shifts", ex::value_of(shifts_text), "cases: T_reg v_d / Delta, comma separated")(
-        "counts", ex::value_of(counts_text), "regularization counts to record")("cells", ex::value_of(base.cells),
-                                                                                "lattice sites on the periodic line")(
-        "pulse-width", ex::value_of(base.pulse_width), "pulse width in spacings")(
-        "contrast", ex::value_of(base.contrast), "pulse density over the background")(
-        "h-over-dx", ex::value_of(base.h_over_dx), "h / Delta");
-    ex::po::variables_map vm;
-    if (!ex::parse(
-            argc, argv, desc, vm,
-            "rsph-drifting-pulse: a square pulse drifting through a periodic 1D lattice, regularized every T_reg.\n"
-            "Usage: rsph-drifting-pulse [--shifts 0.01,0.1,0.5,1.0] [--counts 0,100,...] [--out DIR]"))
-      return 0;
-    if (ex::quick_preset(common)) {
-      if (vm["counts"].defaulted()) counts_text = "0,10,20,30,40";
-    }
-    ex::apply_threads(common.threads);
-    const auto shifts = parse_list(shifts_text, "--shifts");
-    std::vector<int> counts;
-    for (double c : parse_list(counts_text, "--counts")) {
-      require(c >= 0 && c == std::floor(c), "--counts: regularization counts must be whole numbers >= 0");
-      counts.push_back(static_cast<int>(c));
-    }
-    std::sort(counts.begin(), counts.end());
-    base.validate();
-    const auto dir = ex::prepare_output(common.out);
-    const auto wall0 = std::chrono::steady_clock::now();
-    io::Json summary, cases;
-    summary.set("test", "drifting_pulse").set("cells", base.cells).set("h_over_dx", base.h_over_dx);
-    std::uint64_t steps = 0, updates = 0;
-    double reg_seconds = 0.0;
-    io::CsvWriter widths(dir / "widths.csv", {"shift", "regularizations", "width_mass"});
-    for (double shift : shifts) {
-      auto s = base;
-      s.shift = shift;
-      auto sim = scenes::make_drifting_pulse(s);
-      const double m0 = sim.totals().mass;
-      const std::string tag = fmt::format("{:g}", shift);
-      const auto case_dir = dir / ("shift_" + tag);
-      io::ensure_directory(case_dir);
-      io::Json width_json;
-      std::vector<ex::AfterRegularizations> stops;
-      for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
-      ex::Snapshots snapshots(case_dir);
-      const auto cost = ex::run_stops(sim, stops, ex::NoHook{}, [&](const auto& sm, int k) {
-        if (k < 0) return;
-        const int count = counts[static_cast<std::size_t>(k)];
-        const auto x = scenes::comoving_positions(sm, s.v_drift);
-        const auto& p = sm.particles();
-        io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
-        for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
-        csv.close();
-        snapshots.write(sm);
-        const double w = scenes::pulse_width_mass(sm, s);
-        width_json.set(std::to_string(count), w);
-        widths.row({shift, static_cast<double>(count), w});
-      });
-      const double mass_error = ex::relative_change(sim.totals().mass, m0);
-      io::Json c;
-      c.set("width_mass", width_json).set("mass_error", mass_error).set("regularizations", sim.regularizations());
-      c.set("kinetic_energy_dissipated", sim.kinetic_energy_removed());
-      cases.set(tag, c);
-      steps += cost.steps;
-      updates += cost.updates;
-      reg_seconds += cost.phases.regularization;
-      fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", tag, counts.back(),
-                 scenes::pulse_width_mass(sim, s), mass_error);
-    }
-    widths.close();
-    const double wall = ex::seconds_since(wall0);
-    summary.set("cases", cases).set("wall_seconds", wall).set("steps", steps);
-    summary.set("particle_updates_per_second", static_cast<double>(updates) / wall);
-    summary.set("regularization_seconds", reg_seconds);
-    summary.write(dir / "summary.json");
-    fmt::print("output: {}\n", dir.string());
-    return 0;
-  });
-}
+int main(int argc, char** argv) { return ex::run_program("rsph-drifting-pulse", argc, argv, parse_options, run); }

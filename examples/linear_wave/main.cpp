@@ -18,15 +18,16 @@ int main(int argc, char** argv) {
     std::string kernel_name = "quintic";
     ex::po::options_description desc("rsph-linear-wave options");
     ex::add_common_options(desc, common);
-    desc.add_options()("wavelength", ex::value_of(s.wavelength_cells), "lambda / Delta (even)")(
-        "r", ex::value_of(s.r), "RSPH: regularization period over wave period (0: plain SPH)")(
-        "alpha", ex::value_of(s.alpha), "plain SPH (r = 0): artificial viscosity alpha; beta = 2 alpha")(
-        "h-over-dx", ex::value_of(s.h_over_dx), "h / Delta")(
-        "periods", ex::value_of(s.periods), "wave periods to run (N of eq. 11)")("amplitude", ex::value_of(s.amplitude),
-                                                                                 "density amplitude delta rho / rho")(
-        "jitter", ex::value_of(s.jitter), "random initial displacement in Delta (seeds instabilities)")(
-        "courant", ex::value_of(s.courant), "Courant factor")("kernel", ex::value_of(kernel_name),
-                                                              "quintic (the paper's) or cubic");
+    ex::Flags flag(desc);
+    flag("wavelength", s.wavelength_cells, "lambda / Delta (even)");
+    flag("r", s.r, "RSPH: regularization period over wave period (0: plain SPH)");
+    flag("alpha", s.alpha, "plain SPH (r = 0): artificial viscosity alpha; beta = 2 alpha");
+    flag("h-over-dx", s.h_over_dx, "h / Delta");
+    flag("periods", s.periods, "wave periods to run (N of eq. 11)");
+    flag("amplitude", s.amplitude, "density amplitude delta rho / rho");
+    flag("jitter", s.jitter, "random initial displacement in Delta (seeds instabilities)");
+    flag("courant", s.courant, "Courant factor");
+    flag("kernel", kernel_name, "quintic (the paper's) or cubic");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-linear-wave: an isothermal sound wave in a periodic 2 x 0.5 wavelength box.\n"

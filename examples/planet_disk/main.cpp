@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include <optional>
+
 #include <cmath>
 #include <numbers>
 
@@ -67,117 +69,131 @@ void write_maps(const std::filesystem::path& dir, const P& p, const scenes::Plan
   wake.close();
 }
 
+struct Options {
+  scenes::PlanetDiskParams s;
+  ex::CommonOptions common;
+  std::string resolution = "low";
+  double snapshot_every = 10.0;
+  std::size_t map_nr = 210;
+  std::size_t map_nphi = 256;
+};
+
+/// The options from the command line, or none when --help was asked for.
+std::optional<Options> parse_options(int argc, char** argv) {
+  Options opt;
+  auto& [s, common, resolution, snapshot_every, map_nr, map_nphi] = opt;
+  ex::po::options_description desc("rsph-planet-disk options");
+  ex::add_common_options(desc, common);
+  ex::Flags flag(desc);
+  flag("method", s.method, "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity");
+  flag("eos", s.eos, "isothermal (c_s / v_K fixed) or polytropic (eq. 21)");
+  flag("q", s.q, "M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune");
+  flag("resolution", resolution, "low (48 000 particles), med (108 000) or high (191 000)");
+  flag("h-over-dx", s.h_over_dx, "RSPH: h / Delta; SPH: eta");
+  flag("lattice", s.lattice,
+       "square or hexagonal: the start and RSPH's regularization lattice (the same particle count)");
+  flag("orbits", s.orbits, "planet orbits to run");
+  flag("zone-width", s.zone_width, "width of the boundary zones on fixed orbits at both edges");
+  flag("courant", s.courant, "time-step Courant factor");
+  flag("force", s.force, "time-step force factor");
+  flag("max-bin", s.max_bin,
+       "RSPH: individual time steps in power-of-two bins, the shortest 2^-max-bin of the longest (0: one "
+       "global step; SPH always steps globally)");
+  flag("alpha", s.alpha, "SPH artificial viscosity alpha");
+  flag("beta", s.beta, "SPH artificial viscosity beta");
+  flag("n-min", s.N_min, "Appendix A: N_min");
+  flag("n-max", s.N_max, "Appendix A: N_max");
+  flag("dn-max", s.dN_max, "Appendix A: delta N_max");
+  flag("max-steps", s.max_steps, "Appendix A: most steps between regularizations");
+  flag("measure-every", s.measure_every, "orbits between measurements (mass, gap depth)");
+  flag("snapshot-every", snapshot_every, "orbits between snapshots");
+  flag("map-nr", map_nr, "radial cells of the Sigma map");
+  flag("map-nphi", map_nphi, "azimuthal cells of the Sigma map");
+  desc.add_options()("particles", ex::po::value(&s.particles), "particle count over the disk (overrides --resolution)");
+  ex::po::variables_map vm;
+  if (!ex::parse(argc, argv, desc, vm,
+                 "rsph-planet-disk: planet-disk interaction of §5 (de Val-Borro et al. 2006 set-up).\n"
+                 "Usage: rsph-planet-disk [--method rsph] [--eos isothermal] [--q 1e-3] [--resolution low] "
+                 "[--out DIR]"))
+    return std::nullopt;
+  if (!vm.count("particles")) {
+    if (resolution == "low")
+      s.particles = 48000;
+    else if (resolution == "med")
+      s.particles = 108000;
+    else if (resolution == "high")
+      s.particles = 191000;
+    else
+      throw InputError("unknown resolution '" + resolution + "' (low, med, high)");
+  }
+  if (ex::quick_preset(common)) {
+    if (!vm.count("particles")) s.particles = 8000;
+    if (vm["orbits"].defaulted()) s.orbits = 10.0;
+    if (vm["snapshot-every"].defaulted()) snapshot_every = 5.0;
+  }
+  s.validate();
+  require(snapshot_every > 0.0, "--snapshot-every must be positive");
+  require(map_nr >= 2 && map_nphi >= 4, "the Sigma map needs at least 2 x 4 cells");
+  return opt;
+}
+
+int run(Options opt) {
+  auto& [s, common, resolution, snapshot_every, map_nr, map_nphi] = opt;
+  ex::apply_threads(common.threads);
+  const auto dir = ex::prepare_output(common.out);
+  const double period = s.period();
+  io::Progress progress(fmt::format("rsph-planet-disk {} {}", s.method, s.eos), s.orbits * period);
+  io::CsvWriter timeline(dir / "timeline.csv", {"orbit", "time", "mass", "mass_removed", "gap_depth", "particles",
+                                                "steps", "regularizations", "wall_seconds"});
+  std::size_t snapshots = 0;
+  double next_snapshot = 0.0;
+  auto on_step = [&](const auto& sim) {
+    if (!common.quiet) progress.update(sim.time(), sim.steps());
+  };
+  auto on_sample = [&](const auto& sim, const scenes::DiskSample& d) {
+    timeline.row({d.orbit, d.time, d.mass, d.mass_removed, d.gap_depth, static_cast<double>(d.particles),
+                  static_cast<double>(d.steps), static_cast<double>(d.regularizations), d.wall_seconds});
+    const bool last = d.orbit >= s.orbits * (1.0 - 1e-12);
+    if (d.orbit >= next_snapshot * (1.0 - 1e-12) || last) {
+      io::write_snapshot(dir / io::snapshot_name(snapshots++), sim.particles(), sim.time(), sim.steps());
+      next_snapshot += snapshot_every;
+    }
+    if (last) write_maps(dir, sim.particles(), s, sim.time(), map_nr, map_nphi);
+  };
+  const auto r = scenes::run_planet_disk(s, on_step, on_sample);
+  progress.finish();
+  timeline.close();
+
+  io::Json phases = ex::phase_json(r.phases);
+  phases.set("measurement_and_output", r.output_seconds);
+  std::vector<io::Json> mass_over_time;
+  for (const auto& d : r.samples) {
+    io::Json j;
+    j.set("orbit", d.orbit).set("mass", d.mass).set("mass_removed", d.mass_removed).set("gap_depth", d.gap_depth);
+    mass_over_time.push_back(j);
+  }
+  io::Json summary;
+  summary.set("test", "planet_disk").set("method", s.method).set("eos", s.eos).set("q", s.q);
+  summary.set("max_bin", s.rsph() ? s.max_bin : 0);
+  summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
+  summary.set("lattice", s.lattice);
+  summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
+  summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);
+  summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final).set("mass_removed", r.mass_removed);
+  summary.set("mass_error", r.max_mass_error).set("gap_depth", r.samples.back().gap_depth);
+  ex::write_cost(summary, r);
+  summary.set("cpu_seconds", ex::cpu_seconds()).set("remap_seconds", r.remap_seconds);
+  summary.set("phase_seconds", phases).set("timeline", mass_over_time);
+  summary.write(dir / "summary.json");
+  fmt::print(
+      "rsph-planet-disk {} {} q = {}: {} particles, {} steps, {} regularizations, {:.1f} s ({:.2f} M updates/s); "
+      "gap depth {:.3f}, mass removed {:.2e} of {:.3e}, mass error {:.1e}\n",
+      s.method, s.eos, s.q, r.particles_initial, r.steps, r.regularizations, r.wall_seconds,
+      static_cast<double>(r.updates) / r.wall_seconds * 1e-6, r.samples.back().gap_depth, r.mass_removed,
+      r.mass_initial, r.max_mass_error);
+  return 0;
+}
+
 }  // namespace
 
-int main(int argc, char** argv) {
-  return ex::guarded_main("rsph-planet-disk", [&] {
-    scenes::PlanetDiskParams s;
-    ex::CommonOptions common;
-    std::string resolution = "low";
-    double snapshot_every = 10.0;
-    std::size_t map_nr = 210, map_nphi = 256;
-    ex::po::options_description desc("rsph-planet-disk options");
-    ex::add_common_options(desc, common);
-    desc.add_options()("method", ex::value_of(s.method),
-                       "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity")(
-        "eos", ex::value_of(s.eos), "isothermal (c_s / v_K fixed) or polytropic (eq. 21)")(
-        "q", ex::value_of(s.q), "M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune")(
-        "resolution", ex::value_of(resolution), "low (48 000 particles), med (108 000) or high (191 000)")(
-        "particles", ex::po::value(&s.particles), "particle count over the disk (overrides --resolution)")(
-        "h-over-dx", ex::value_of(s.h_over_dx), "RSPH: h / Delta; SPH: eta")(
-        "lattice", ex::value_of(s.lattice),
-        "square or hexagonal: the start and RSPH's regularization lattice (the same particle count)")(
-        "orbits", ex::value_of(s.orbits), "planet orbits to run")(
-        "zone-width", ex::value_of(s.zone_width), "width of the boundary zones on fixed orbits at both edges")(
-        "courant", ex::value_of(s.courant), "time-step Courant factor")("force", ex::value_of(s.force),
-                                                                        "time-step force factor")(
-        "max-bin", ex::value_of(s.max_bin),
-        "RSPH: individual time steps in power-of-two bins, the shortest 2^-max-bin of the longest (0: one "
-        "global step; SPH always steps globally)")("alpha", ex::value_of(s.alpha), "SPH artificial viscosity alpha")(
-        "beta", ex::value_of(s.beta), "SPH artificial viscosity beta")(
-        "n-min", ex::value_of(s.N_min), "Appendix A: N_min")("n-max", ex::value_of(s.N_max), "Appendix A: N_max")(
-        "dn-max", ex::value_of(s.dN_max), "Appendix A: delta N_max")("max-steps", ex::value_of(s.max_steps),
-                                                                     "Appendix A: most steps between regularizations")(
-        "measure-every", ex::value_of(s.measure_every), "orbits between measurements (mass, gap depth)")(
-        "snapshot-every", ex::value_of(snapshot_every), "orbits between snapshots")(
-        "map-nr", ex::value_of(map_nr), "radial cells of the Sigma map")("map-nphi", ex::value_of(map_nphi),
-                                                                         "azimuthal cells of the Sigma map");
-    ex::po::variables_map vm;
-    if (!ex::parse(argc, argv, desc, vm,
-                   "rsph-planet-disk: planet-disk interaction of §5 (de Val-Borro et al. 2006 set-up).\n"
-                   "Usage: rsph-planet-disk [--method rsph] [--eos isothermal] [--q 1e-3] [--resolution low] "
-                   "[--out DIR]"))
-      return 0;
-    if (!vm.count("particles")) {
-      if (resolution == "low")
-        s.particles = 48000;
-      else if (resolution == "med")
-        s.particles = 108000;
-      else if (resolution == "high")
-        s.particles = 191000;
-      else
-        throw InputError("unknown resolution '" + resolution + "' (low, med, high)");
-    }
-    if (ex::quick_preset(common)) {
-      if (!vm.count("particles")) s.particles = 8000;
-      if (vm["orbits"].defaulted()) s.orbits = 10.0;
-      if (vm["snapshot-every"].defaulted()) snapshot_every = 5.0;
-    }
-    s.validate();
-    require(snapshot_every > 0.0, "--snapshot-every must be positive");
-    require(map_nr >= 2 && map_nphi >= 4, "the Sigma map needs at least 2 x 4 cells");
-    ex::apply_threads(common.threads);
-    const auto dir = ex::prepare_output(common.out);
-    const double period = s.period();
-    io::Progress progress(fmt::format("rsph-planet-disk {} {}", s.method, s.eos), s.orbits * period);
-    io::CsvWriter timeline(dir / "timeline.csv", {"orbit", "time", "mass", "mass_removed", "gap_depth", "particles",
-                                                  "steps", "regularizations", "wall_seconds"});
-    std::size_t snapshots = 0;
-    double next_snapshot = 0.0;
-    auto on_step = [&](const auto& sim) {
-      if (!common.quiet) progress.update(sim.time(), sim.steps());
-    };
-    auto on_sample = [&](const auto& sim, const scenes::DiskSample& d) {
-      timeline.row({d.orbit, d.time, d.mass, d.mass_removed, d.gap_depth, static_cast<double>(d.particles),
-                    static_cast<double>(d.steps), static_cast<double>(d.regularizations), d.wall_seconds});
-      const bool last = d.orbit >= s.orbits * (1.0 - 1e-12);
-      if (d.orbit >= next_snapshot * (1.0 - 1e-12) || last) {
-        io::write_snapshot(dir / io::snapshot_name(snapshots++), sim.particles(), sim.time(), sim.steps());
-        next_snapshot += snapshot_every;
-      }
-      if (last) write_maps(dir, sim.particles(), s, sim.time(), map_nr, map_nphi);
-    };
-    const auto r = scenes::run_planet_disk(s, on_step, on_sample);
-    progress.finish();
-    timeline.close();
-
-    io::Json phases = ex::phase_json(r.phases);
-    phases.set("measurement_and_output", r.output_seconds);
-    std::vector<io::Json> mass_over_time;
-    for (const auto& d : r.samples) {
-      io::Json j;
-      j.set("orbit", d.orbit).set("mass", d.mass).set("mass_removed", d.mass_removed).set("gap_depth", d.gap_depth);
-      mass_over_time.push_back(j);
-    }
-    io::Json summary;
-    summary.set("test", "planet_disk").set("method", s.method).set("eos", s.eos).set("q", s.q);
-    summary.set("max_bin", s.rsph() ? s.max_bin : 0);
-    summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
-    summary.set("lattice", s.lattice);
-    summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
-    summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);
-    summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final).set("mass_removed", r.mass_removed);
-    summary.set("mass_error", r.max_mass_error).set("gap_depth", r.samples.back().gap_depth);
-    ex::write_cost(summary, r);
-    summary.set("cpu_seconds", ex::cpu_seconds()).set("remap_seconds", r.remap_seconds);
-    summary.set("phase_seconds", phases).set("timeline", mass_over_time);
-    summary.write(dir / "summary.json");
-    fmt::print(
-        "rsph-planet-disk {} {} q = {}: {} particles, {} steps, {} regularizations, {:.1f} s ({:.2f} M updates/s); "
-        "gap depth {:.3f}, mass removed {:.2e} of {:.3e}, mass error {:.1e}\n",
-        s.method, s.eos, s.q, r.particles_initial, r.steps, r.regularizations, r.wall_seconds,
-        static_cast<double>(r.updates) / r.wall_seconds * 1e-6, r.samples.back().gap_depth, r.mass_removed,
-        r.mass_initial, r.max_mass_error);
-    return 0;
-  });
-}
+int main(int argc, char** argv) { return ex::run_program("rsph-planet-disk", argc, argv, parse_options, run); }

@@ -104,25 +104,25 @@ int main(int argc, char** argv) {
     Options opt;
     ex::po::options_description desc("rsph-sod options");
     ex::add_common_options(desc, opt.common);
-    desc.add_options()("dim", ex::value_of(opt.dim), "1, or 2 for a strip periodic in y")(
-        "n-left", ex::value_of(opt.sod.n_left), "particles across the left half")(
-        "ny-left", ex::value_of(opt.sod.ny_left), "2D: particles across the strip (left state)")(
-        "h-over-dx", ex::value_of(opt.sod.h_over_dx), "h / particle spacing")(
-        "alpha", ex::value_of(opt.sod.alpha), "artificial viscosity alpha")("beta", ex::value_of(opt.sod.beta),
-                                                                            "artificial viscosity beta")(
-        "t-end", ex::value_of(opt.sod.t_end), "end time")("courant", ex::value_of(opt.sod.courant), "Courant factor")(
-        "gamma", ex::value_of(opt.sod.gamma), "ratio of specific heats")(
-        "kernel", ex::value_of(opt.kernel), "cubic, quintic or wendland")("snapshots", ex::value_of(opt.snapshots),
-                                                                          "HDF5 snapshots after the initial one")(
-        "method", ex::value_of(opt.method),
-        "sph: equal masses, grad-h; rsph: lattice regularization, levels in factors of two")(
-        "cycle", ex::value_of(opt.rsph.cycle), "rsph: steps between regularizations")(
-        "consistent-gradient", ex::po::bool_switch(&opt.consistent_gradient),
-        "rsph: continuity density and pair gradients corrected so that level faces keep uniform states exact")(
-        "gradient-tolerance", ex::value_of(opt.gradient.tolerance),
-        "rsph: relative residual of the consistent-gradient solve")(
-        "max-bin", ex::value_of(opt.rsph.max_bin),
-        "rsph: individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: global)");
+    ex::Flags flag(desc);
+    flag("dim", opt.dim, "1, or 2 for a strip periodic in y");
+    flag("n-left", opt.sod.n_left, "particles across the left half");
+    flag("ny-left", opt.sod.ny_left, "2D: particles across the strip (left state)");
+    flag("h-over-dx", opt.sod.h_over_dx, "h / particle spacing");
+    flag("alpha", opt.sod.alpha, "artificial viscosity alpha");
+    flag("beta", opt.sod.beta, "artificial viscosity beta");
+    flag("t-end", opt.sod.t_end, "end time");
+    flag("courant", opt.sod.courant, "Courant factor");
+    flag("gamma", opt.sod.gamma, "ratio of specific heats");
+    flag("kernel", opt.kernel, "cubic, quintic or wendland");
+    flag("snapshots", opt.snapshots, "HDF5 snapshots after the initial one");
+    flag("method", opt.method, "sph: equal masses, grad-h; rsph: lattice regularization, levels in factors of two");
+    flag("cycle", opt.rsph.cycle, "rsph: steps between regularizations");
+    flag("consistent-gradient", opt.consistent_gradient,
+         "rsph: continuity density and pair gradients corrected so that level faces keep uniform states exact");
+    flag("gradient-tolerance", opt.gradient.tolerance, "rsph: relative residual of the consistent-gradient solve");
+    flag("max-bin", opt.rsph.max_bin,
+         "rsph: individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: global)");
     ex::add_level_options(desc, opt.rsph.refinement, "rsph",
                           "finest level L (0: uniform); the finest spacing is 0.5 / n-left");
     ex::po::variables_map vm;

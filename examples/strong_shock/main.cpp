@@ -9,99 +9,118 @@
 
 #include <fmt/format.h>
 
+#include <optional>
+
 using namespace rsph;
 namespace ex = rsph::examples;
 
-int main(int argc, char** argv) {
-  return ex::guarded_main("rsph-strong-shock", [&] {
-    scenes::StrongShockParams s;
-    ex::CommonOptions common;
-    std::string method = "rsph";
-    ex::po::options_description desc("rsph-strong-shock options");
-    ex::add_common_options(desc, common);
-    desc.add_options()("method", ex::value_of(method), "rsph or sph")(
-        "alpha", ex::value_of(s.alpha), "artificial viscosity alpha")("beta", ex::value_of(s.beta),
-                                                                      "artificial viscosity beta")(
-        "nx", ex::value_of(s.nx), "RSPH: lattice cells along x")("ny", ex::value_of(s.ny),
-                                                                 "RSPH: lattice rows across the strip")(
-        "h-over-dx", ex::value_of(s.h_over_dx), "RSPH: h / Delta")("max-steps", ex::value_of(s.max_steps),
-                                                                   "RSPH: most steps between regularizations")(
-        "sph-left", ex::value_of(s.sph_nx_left), "SPH: particles along x, left half")(
-        "sph-left-rows", ex::value_of(s.sph_ny_left), "SPH: rows, left half")("sph-right", ex::value_of(s.sph_nx_right),
-                                                                              "SPH: particles along x, right half")(
-        "sph-right-rows", ex::value_of(s.sph_ny_right), "SPH: rows, right half")(
-        "eta", ex::value_of(s.eta), "SPH: h = eta (m / rho)^(1/2)")("t-end", ex::value_of(s.t_end), "end time")(
-        "courant", ex::value_of(s.courant), "Courant factor");
-    ex::add_level_options(desc, s.refinement, "RSPH",
-                          "finest level of a lattice in factors of two (0: uniform); nx, ny count finest cells");
-    ex::po::variables_map vm;
-    if (!ex::parse(argc, argv, desc, vm,
-                   "rsph-strong-shock: (rho, v, P) = (1, 0, 1e10) | (0.125, 0, 0.1), gamma = 1.4, t = 2.5e-6.\n"
-                   "Usage: rsph-strong-shock --method rsph|sph [--alpha 2 --beta 4] [--out DIR]"))
-      return 0;
-    if (ex::quick_preset(common)) {
-      // on levels, the quick lattice is rounded up to whole blocks of finest cells
-      const auto blocks = [&](int n) {
-        const auto fine = static_cast<int>(s.refinement.fine_cells_per_block());
-        return s.refinement.levels > 0 ? (n + fine - 1) / fine * fine : n;
-      };
-      if (vm["nx"].defaulted()) s.nx = blocks(256);
-      if (vm["ny"].defaulted()) s.ny = blocks(6);
-      if (vm["sph-left"].defaulted()) s.sph_nx_left = 400;
-      if (vm["sph-left-rows"].defaulted()) s.sph_ny_left = 16;
-      if (vm["sph-right"].defaulted()) s.sph_nx_right = 50;
-      if (vm["sph-right-rows"].defaulted()) s.sph_ny_right = 2;
-    }
-    s.validate();
-    ex::apply_threads(common.threads);
-    const auto dir = ex::prepare_output(common.out);
-    io::Progress progress("rsph-strong-shock " + method, s.t_end);
-    auto on_step = [&](const auto& sim) {
-      if (!common.quiet) progress.update(sim.time(), sim.steps());
-    };
-    io::Json scheme;
-    auto on_end = [&](const auto& sim) {
-      io::write_snapshot(dir / io::snapshot_name(0), sim.particles(), sim.time(), sim.steps());
-      ex::write_scheme(scheme, sim);
-    };
-    scenes::ShockRun r;
-    if (method == "rsph" && s.refinement.levels > 0)
-      r = scenes::run_shock(scenes::make_rsph_levels_shock(s), s, on_step, on_end);
-    else if (method == "rsph")
-      r = scenes::run_shock(scenes::make_rsph_shock(s), s, on_step, on_end);
-    else if (method == "sph")
-      r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end);
-    else
-      throw InputError("unknown method '" + method + "' (rsph, sph)");
-    progress.finish();
+namespace {
 
-    io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});
-    for (std::size_t a = 0; a < r.x.size(); ++a) parts.row({r.x[a], r.y[a], r.rho[a], r.v[a], r.P[a], r.u[a]});
-    parts.close();
-    const analysis::ExactRiemann exact(s.left, s.right, s.gamma);
-    io::CsvWriter ex_csv(dir / "exact.csv", {"x", "rho", "v", "P"});
-    for (int i = 0; i <= 4000; ++i) {
-      const double x = i / 4000.0;
-      const auto q = exact.sample((x - 0.5) / s.t_end);
-      ex_csv.row({x, q.rho, q.v, q.P});
-    }
-    ex_csv.close();
-    io::Json summary;
-    summary.set("test", "strong_shock").set("method", method).set("alpha", s.alpha).set("beta", s.beta);
-    summary.set("particles", r.particles_final);
-    summary.set("L1_rho", r.errors.L1_rho).set("L1_v", r.errors.L1_v).set("L1_P", r.errors.L1_P);
-    summary.set("shock_position", r.shock_position).set("shock_position_exact", r.shock_position_exact);
-    summary.set("contact_position_exact", r.contact_exact).set("penetration_fraction", r.penetration);
-    summary.set("energy_error", r.energy_error);
-    ex::write_cost(summary, r);
-    summary.merge(scheme);
-    if (method == "rsph") summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels));
-    summary.write(dir / "summary.json");
-    fmt::print(
-        "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"
-        "  L1(rho) = {:.4g}, L1(v) = {:.4g}; shock at {:.4f} (exact {:.4f}); penetration {:.3f}; energy error {:.2e}\n",
-        method, s.alpha, s.beta, r.particles_final, r.steps, r.regularizations, r.wall_seconds, r.errors.L1_rho,
-        r.errors.L1_v, r.shock_position, r.shock_position_exact, r.penetration, r.energy_error);
-    return 0;
-  });
+struct Options {
+  scenes::StrongShockParams s;
+  ex::CommonOptions common;
+  std::string method = "rsph";
+};
+
+/// The options from the command line, or none when --help was asked for.
+std::optional<Options> parse_options(int argc, char** argv) {
+  Options opt;
+  auto& [s, common, method] = opt;
+  ex::po::options_description desc("rsph-strong-shock options");
+  ex::add_common_options(desc, common);
+  ex::Flags flag(desc);
+  flag("method", method, "rsph or sph");
+  flag("alpha", s.alpha, "artificial viscosity alpha");
+  flag("beta", s.beta, "artificial viscosity beta");
+  flag("nx", s.nx, "RSPH: lattice cells along x");
+  flag("ny", s.ny, "RSPH: lattice rows across the strip");
+  flag("h-over-dx", s.h_over_dx, "RSPH: h / Delta");
+  flag("max-steps", s.max_steps, "RSPH: most steps between regularizations");
+  flag("sph-left", s.sph_nx_left, "SPH: particles along x, left half");
+  flag("sph-left-rows", s.sph_ny_left, "SPH: rows, left half");
+  flag("sph-right", s.sph_nx_right, "SPH: particles along x, right half");
+  flag("sph-right-rows", s.sph_ny_right, "SPH: rows, right half");
+  flag("eta", s.eta, "SPH: h = eta (m / rho)^(1/2)");
+  flag("t-end", s.t_end, "end time");
+  flag("courant", s.courant, "Courant factor");
+  ex::add_level_options(desc, s.refinement, "RSPH",
+                        "finest level of a lattice in factors of two (0: uniform); nx, ny count finest cells");
+  ex::po::variables_map vm;
+  if (!ex::parse(argc, argv, desc, vm,
+                 "rsph-strong-shock: (rho, v, P) = (1, 0, 1e10) | (0.125, 0, 0.1), gamma = 1.4, t = 2.5e-6.\n"
+                 "Usage: rsph-strong-shock --method rsph|sph [--alpha 2 --beta 4] [--out DIR]"))
+    return std::nullopt;
+  if (ex::quick_preset(common)) {
+    // on levels, the quick lattice is rounded up to whole blocks of finest cells
+    const auto blocks = [&](int n) {
+      const auto fine = static_cast<int>(s.refinement.fine_cells_per_block());
+      return s.refinement.levels > 0 ? (n + fine - 1) / fine * fine : n;
+    };
+    if (vm["nx"].defaulted()) s.nx = blocks(256);
+    if (vm["ny"].defaulted()) s.ny = blocks(6);
+    if (vm["sph-left"].defaulted()) s.sph_nx_left = 400;
+    if (vm["sph-left-rows"].defaulted()) s.sph_ny_left = 16;
+    if (vm["sph-right"].defaulted()) s.sph_nx_right = 50;
+    if (vm["sph-right-rows"].defaulted()) s.sph_ny_right = 2;
+  }
+  s.validate();
+  return opt;
 }
+
+int run(Options opt) {
+  auto& [s, common, method] = opt;
+  ex::apply_threads(common.threads);
+  const auto dir = ex::prepare_output(common.out);
+  io::Progress progress("rsph-strong-shock " + method, s.t_end);
+  auto on_step = [&](const auto& sim) {
+    if (!common.quiet) progress.update(sim.time(), sim.steps());
+  };
+  io::Json scheme;
+  auto on_end = [&](const auto& sim) {
+    io::write_snapshot(dir / io::snapshot_name(0), sim.particles(), sim.time(), sim.steps());
+    ex::write_scheme(scheme, sim);
+  };
+  scenes::ShockRun r;
+  if (method == "rsph" && s.refinement.levels > 0)
+    r = scenes::run_shock(scenes::make_rsph_levels_shock(s), s, on_step, on_end);
+  else if (method == "rsph")
+    r = scenes::run_shock(scenes::make_rsph_shock(s), s, on_step, on_end);
+  else if (method == "sph")
+    r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end);
+  else
+    throw InputError("unknown method '" + method + "' (rsph, sph)");
+  progress.finish();
+
+  io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});
+  for (std::size_t a = 0; a < r.x.size(); ++a) parts.row({r.x[a], r.y[a], r.rho[a], r.v[a], r.P[a], r.u[a]});
+  parts.close();
+  const analysis::ExactRiemann exact(s.left, s.right, s.gamma);
+  io::CsvWriter ex_csv(dir / "exact.csv", {"x", "rho", "v", "P"});
+  for (int i = 0; i <= 4000; ++i) {
+    const double x = i / 4000.0;
+    const auto q = exact.sample((x - 0.5) / s.t_end);
+    ex_csv.row({x, q.rho, q.v, q.P});
+  }
+  ex_csv.close();
+  io::Json summary;
+  summary.set("test", "strong_shock").set("method", method).set("alpha", s.alpha).set("beta", s.beta);
+  summary.set("particles", r.particles_final);
+  summary.set("L1_rho", r.errors.L1_rho).set("L1_v", r.errors.L1_v).set("L1_P", r.errors.L1_P);
+  summary.set("shock_position", r.shock_position).set("shock_position_exact", r.shock_position_exact);
+  summary.set("contact_position_exact", r.contact_exact).set("penetration_fraction", r.penetration);
+  summary.set("energy_error", r.energy_error);
+  ex::write_cost(summary, r);
+  summary.merge(scheme);
+  if (method == "rsph") summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels));
+  summary.write(dir / "summary.json");
+  fmt::print(
+      "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"
+      "  L1(rho) = {:.4g}, L1(v) = {:.4g}; shock at {:.4f} (exact {:.4f}); penetration {:.3f}; energy error {:.2e}\n",
+      method, s.alpha, s.beta, r.particles_final, r.steps, r.regularizations, r.wall_seconds, r.errors.L1_rho,
+      r.errors.L1_v, r.shock_position, r.shock_position_exact, r.penetration, r.energy_error);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) { return ex::run_program("rsph-strong-shock", argc, argv, parse_options, run); }
