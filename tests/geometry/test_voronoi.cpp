@@ -245,3 +245,41 @@ TEST_CASE("coincident particles and particles outside the domain are refused", "
   out[3] = Point(1.5, 0.5);
   CHECK_THROWS_WITH(areas_of<LocalVoronoi>(out, box), Catch::Contains("particle 3 lies outside the domain"));
 }
+
+TEST_CASE("sparse, clustered and outlying sets in walled boxes: every cell exact", "[voronoi]") {
+  // The local builder stopped once its disc's square held every point, though it had cut only by those in
+  // the disc: a neighbour just outside never cut, and cells of sparse walled sets came out too large.
+  auto check = [](const std::vector<Point>& x, const Box<2>& box) {
+    const auto oracle = brute_force_areas(x, box);
+    const auto local = areas_of<LocalVoronoi>(x, box);
+    const auto boost = areas_of<BoostVoronoi>(x, box);
+    REQUIRE(local.size() == x.size());
+    const double domain = (box.hi[0] - box.lo[0]) * (box.hi[1] - box.lo[1]);
+    CHECK(std::abs(sum(local) - domain) < 1e-12 * domain);
+    CHECK(std::abs(sum(boost) - domain) < 1e-12 * domain);
+    double worst = 0.0;
+    for (std::size_t a = 0; a < x.size(); ++a) worst = std::max(worst, std::abs(local[a] - oracle[a]) / oracle[a]);
+    CHECK(worst < 1e-10);
+  };
+  int cases = 0;
+  for (unsigned seed = 0; seed < 200; ++seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const int n = 2 + static_cast<int>(seed % 7);
+    std::vector<Point> x;
+    for (int i = 0; i < n; ++i) x.push_back(seed % 3 == 0 ? Point(0.1 * u(rng), 0.1 * u(rng)) : Point(u(rng), u(rng)));
+    INFO("seed " << seed << ", " << n << " particles");
+    check(x, box_with(Edge::reflecting, Edge::reflecting));
+    ++cases;
+  }
+  CHECK(cases == 200);
+  // A cluster of 3000 and three far outliers in the corners of a walled box.
+  std::mt19937 rng(7);
+  std::normal_distribution<double> g(0.3, 0.01);
+  std::vector<Point> x;
+  for (int i = 0; i < 3000; ++i) x.emplace_back(std::clamp(g(rng), 0.0, 1.0), std::clamp(g(rng), 0.0, 1.0));
+  x.emplace_back(0.999, 0.999);
+  x.emplace_back(0.001, 0.998);
+  x.emplace_back(0.997, 0.002);
+  check(x, box_with(Edge::reflecting, Edge::reflecting));
+}

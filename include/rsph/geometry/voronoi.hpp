@@ -208,8 +208,11 @@ inline double mean_spacing(const std::vector<Point>& x, const Box<2>& box) {
         hi[k] = std::max(hi[k], p[k]);
       }
     }
-  const double extent = std::max((hi - lo).prod(), 1e-300);
-  return std::sqrt(extent / static_cast<double>(std::max<std::size_t>(x.size(), 1)));
+  const double n = static_cast<double>(std::max<std::size_t>(x.size(), 1));
+  // A set thinner than its spacing (collinear on an open axis) has the spacing along its length: the area's
+  // would be tiny, and every cell's search would start from nothing.
+  const double along = (hi - lo).maxCoeff() / n;
+  return std::max(std::sqrt(std::max((hi - lo).prod(), 0.0) / n), std::max(along, 1e-300));
 }
 
 /// Squared distance of the farthest vertex from the particle (cells are given relative to it).
@@ -470,6 +473,29 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
     return cut_by({found.data(), n_found}, cell, scratch, r2_max);
   }
 
+  /// Once the square of the gathered disc (radius) holds every point, the points outside the disc are all
+  /// that is left: the cell is cut by each of them, nearest first, and is then exact. (Stopping there instead
+  /// left sparse sets in walled or open boxes with cells too large: a neighbour just outside the disc never
+  /// cut.) Returns false as cut_by does.
+  static bool cut_by_rest(const neighbors::CellList<2>& cells, std::size_t a, const Point& xa, double radius,
+                          ConvexPolygon*& cell, ConvexPolygon*& scratch, double& r2_max,
+                          std::vector<Candidate>& found) {
+    const double outer2 = radius * radius;
+    std::size_t n_found = 0;
+    cells.for_each_run_within(xa, radius, [&](const std::uint32_t* index, const Point* at, std::size_t count) {
+      grown(found, n_found + count);
+      for (std::size_t s = 0; s < count; ++s) {
+        const Point d = at[s] - xa;
+        const double d2 = d.squaredNorm();
+        found[n_found] = {d2, d};
+        n_found += static_cast<std::size_t>((d2 > outer2) & (index[s] != a));
+      }
+    });
+    const std::span<Candidate> rest(found.data(), n_found);
+    std::sort(rest.begin(), rest.end(), [](const Candidate& p, const Candidate& q) { return p.d2 < q.d2; });
+    return cut_by(rest, cell, scratch, r2_max);
+  }
+
   template <class Visitor>
   bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
                  double margin, Visitor& visit, std::span<const std::uint32_t> only) {
@@ -526,7 +552,11 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
             std::sort(disc.begin(), disc.end(), [](const Candidate& p, const Candidate& q) { return p.d2 < q.d2; });
             if (!cut_by(disc, cell, scratch, r2_max)) break;
           }
-          if (4.0 * r2_max <= outer2 || cells.covers(xa, radius)) break;
+          if (4.0 * r2_max <= outer2) break;
+          if (cells.covers(xa, radius)) {  // the disc's square holds every point: cut by those outside the disc
+            cut_by_rest(cells, a, xa, radius, cell, scratch, r2_max, extra);
+            break;
+          }
           if (r2_max <= outer2) {  // the vertex discs reach at most one radius beyond: gather only them
             cut_by_vertex_discs(cells, a, xa, outer2, cell, scratch, r2_max, extra);
             break;
