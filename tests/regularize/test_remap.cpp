@@ -2,7 +2,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <limits>
 #include <random>
+#include <string>
 
 #include "../geometry/boost_oracle.hpp"
 #include "particle_sets.hpp"
@@ -419,4 +421,38 @@ TEST_CASE("the new particles carry no pressure, rates or frozen flags of the old
     CHECK(p.dv_dt[a] == Vec<2>::Zero());
     CHECK(p.frozen[a] == 0);
   }
+}
+
+TEST_CASE("the remap refuses non-finite, negative and all-zero fields, naming the particle and field", "[remap]") {
+  const Box<2> box = box_with(Edge::periodic, Edge::periodic);
+  auto refuses = [&](auto spoil, const std::string& expect) {
+    auto p = jittered_gas(16, 0.2, 5);
+    spoil(p);
+    geometry::LocalVoronoi builder;
+    INFO(expect);
+    CHECK_THROWS_WITH(remap_onto_lattice(p, box, lattice::Square{1.0 / 16}, builder, RemapParams{}),
+                      Catch::Contains(expect));
+  };
+  const double inf = std::numeric_limits<double>::infinity(), nan = std::numeric_limits<double>::quiet_NaN();
+  // a mass of -inf once sent the hand-on of sparse cells round forever
+  refuses([&](auto& p) { p.m[3] = -inf; }, "particle 3: mass must be finite and non-negative");
+  refuses([&](auto& p) { p.m[7] = -1e-3; }, "particle 7: mass must be finite and non-negative");
+  refuses([&](auto& p) { p.m[0] = nan; }, "particle 0: mass");
+  refuses([&](auto& p) { p.v[5] = Vec<2>(nan, 0.0); }, "particle 5: velocity is not finite");
+  refuses([&](auto& p) { p.u[9] = inf; }, "particle 9: internal energy must be finite");
+  refuses([&](auto& p) { p.x[2] = Vec<2>(inf, 0.5); }, "particle 2: position is not finite");
+  refuses(
+      [&](auto& p) {
+        for (auto& m : p.m) m = 0.0;
+      },
+      "every mass is zero");
+}
+
+TEST_CASE("a far outlier on an open axis is refused before the remap asks for its grid", "[remap]") {
+  auto p = jittered_gas(16, 0.2, 5);
+  p.x[4] = Vec<2>(0.5, 1e7);  // ten million box lengths away along the open axis
+  geometry::LocalVoronoi builder;
+  CHECK_THROWS_WITH(
+      remap_onto_lattice(p, box_with(Edge::periodic, Edge::open), lattice::Square{1.0 / 16}, builder, RemapParams{}),
+      Catch::Contains("a particle far from the rest on an open axis"));
 }

@@ -8,8 +8,8 @@
 
 namespace rsph {
 
-/// floor(x) as an integer index (|x| < 2^62), inline: without SSE4.1, x86-64 compiles std::floor to a library
-/// call, and the cell searches take several per particle.
+/// floor(x) as an integer index (finite, |x| < 2^62: callers clamp first where x may be far or not finite), inline:
+/// without SSE4.1, x86-64 compiles std::floor to a library call, and the cell searches take several per particle.
 inline std::int64_t floor_index(double x) {
   const auto t = static_cast<std::int64_t>(x);  // truncates towards zero
   return t - static_cast<std::int64_t>(static_cast<double>(t) > x);

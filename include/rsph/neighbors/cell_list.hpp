@@ -45,7 +45,9 @@ class CellList {
     for (;;) {
       std::size_t total = 1;
       for (int k = 0; k < D; ++k) {
-        dims_[k] = std::max<std::int64_t>(1, static_cast<std::int64_t>((hi[k] - lo_[k]) / size) + 1);
+        // as a double first: an extent of many cells (a far outlier, a degenerate axis) cannot overflow
+        const double cells = std::min((hi[k] - lo_[k]) / size + 1.0, static_cast<double>(4 * n + 65));
+        dims_[k] = std::max<std::int64_t>(1, static_cast<std::int64_t>(cells));
         total *= static_cast<std::size_t>(dims_[k]);
       }
       if (total <= 4 * n + 64) break;
@@ -129,10 +131,12 @@ class CellList {
   }
 
   /// The bin along axis k that coordinate x falls in, clamped to the grid (clamped first as a double, so a far
-  /// coordinate cannot overflow the integer).
+  /// or non-finite coordinate cannot overflow the integer).
   std::int64_t bin_along(int k, double x) const {
-    const double at = std::clamp((x - lo_[k]) * inv_size_, 0.0, static_cast<double>(dims_[k] - 1));
-    return floor_index(at);
+    double at = (x - lo_[k]) * inv_size_;
+    at = at > 0.0 ? at : 0.0;  // NaN too: floor_index is then given a number in range
+    const double top = static_cast<double>(dims_[k] - 1);
+    return floor_index(at < top ? at : top);
   }
 
   std::array<std::int64_t, D> coords(const Vec<D>& p) const {

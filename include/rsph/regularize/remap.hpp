@@ -230,7 +230,13 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
     g.count[kk] = g.range.hi[kk] - g.range.lo[kk] + 1;
     g.n_cells *= static_cast<std::size_t>(g.count[kk]);
   }
-  require(g.n_cells < (std::size_t{1} << 31), "regularization: the lattice would have more than 2^31 cells");
+  // The sums take (3 + D) doubles per cell and thread: refuse a grid that would not fit rather than ask for it.
+  const double gib = static_cast<double>(g.n_cells) * static_cast<double>((3 + D) * sizeof(double)) *
+                     static_cast<double>(std::max(1, max_threads())) / double(1u << 30);
+  require(g.n_cells < (std::size_t{1} << 31) && gib <= 4.0,
+          "regularization: the particles span " + std::to_string(g.n_cells) + " lattice cells (" +
+              std::to_string(n_old) + " particles; the remap's sums would take " + std::to_string(gib) +
+              " GiB): a particle far from the rest on an open axis?");
   return g;
 }
 
@@ -736,6 +742,21 @@ void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const
   require(lattice.spacing > 0.0, "regularization: the lattice spacing must be positive");
   require(p.n_ghost() == 0, "regularization: remove ghosts before remapping");
   require(p.n_real > 0, "regularization: no particles to remap");
+  auto refuse = [](std::size_t a, const std::string& what) {
+    throw InputError("regularization: particle " + std::to_string(a) + ": " + what);
+  };
+  double total = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    if (!(std::isfinite(p.m[a]) && p.m[a] >= 0.0))
+      refuse(a, "mass must be finite and non-negative (got " + std::to_string(p.m[a]) + ")");
+    if (!p.x[a].allFinite()) refuse(a, "position is not finite");
+    if (!p.v[a].allFinite()) refuse(a, "velocity is not finite");
+    if constexpr (E)
+      if (!(std::isfinite(p.u[a]) && p.u[a] >= 0.0))
+        refuse(a, "internal energy must be finite and non-negative (got " + std::to_string(p.u[a]) + ")");
+    total += p.m[a];
+  }
+  require(total > 0.0, "regularization: every mass is zero: nothing to remap");
 }
 
 }  // namespace detail
