@@ -42,6 +42,13 @@ po::typed_value<T>* value_of(T& field) {
   return po::value(&field)->default_value(field, default_text(field));
 }
 
+/// A number flag whose value must be finite (inf and nan are refused with the flag's name).
+inline po::typed_value<double>* finite_value_of(double& field, const std::string& name) {
+  return value_of(field)->notifier([name](double v) {
+    if (!std::isfinite(v)) throw InputError("--" + name + " must be a finite number (got " + default_text(v) + ")");
+  });
+}
+
 /// Adds flags one per call, each bound to a field and defaulting to its value:
 /// `flag("cells", s.cells, "lattice cells")("h-over-dx", s.h_over_dx, "h / Delta")`. A bool field is a switch.
 class Flags {
@@ -51,6 +58,8 @@ class Flags {
   Flags& operator()(const char* name, T& field, const char* help) {
     if constexpr (std::is_same_v<T, bool>)
       desc_.add_options()(name, po::bool_switch(&field), help);
+    else if constexpr (std::is_same_v<T, double>)
+      desc_.add_options()(name, finite_value_of(field, name), help);
     else
       desc_.add_options()(name, value_of(field), help);
     return *this;
@@ -134,6 +143,7 @@ inline bool quick_preset(const CommonOptions& common) {
 }
 
 inline void apply_threads(int threads) {
+  require(threads >= 0, "--threads must be 0 (all cores) or a positive count (got " + std::to_string(threads) + ")");
 #ifdef _OPENMP
   if (threads > 0) omp_set_num_threads(threads);
 #else

@@ -37,7 +37,7 @@ int run(const Options& opt, Sim sim) {
   ex::Snapshots snapshots(dir);
   io::Progress progress(fmt::format("rsph-sod {}D {}", D, opt.method), opt.sod.t_end);
   const auto cost = ex::run_stops(
-      sim, ex::evenly(opt.sod.t_end, std::max(opt.snapshots, 1)),
+      sim, ex::evenly(opt.sod.t_end, opt.snapshots),
       [&](const auto& s) { log.record(s.time(), s.steps(), s.totals()); },
       [&](const auto& s, int) { snapshots.write(s); }, opt.common.quiet ? nullptr : &progress);
   log.close();
@@ -134,6 +134,7 @@ int main(int argc, char** argv) {
       if (vm["n-left"].defaulted()) opt.sod.n_left = 200;
       if (vm["snapshots"].defaulted()) opt.snapshots = 2;
     }
+    require(opt.snapshots >= 1, "--snapshots must be at least 1 (got " + std::to_string(opt.snapshots) + ")");
     ex::apply_threads(opt.common.threads);
     if (opt.dim == 1) return run_kernel<1>(opt);
     if (opt.dim == 2) return run_kernel<2>(opt);

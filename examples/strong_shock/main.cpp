@@ -63,6 +63,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
     if (vm["sph-right"].defaulted()) s.sph_nx_right = 50;
     if (vm["sph-right-rows"].defaulted()) s.sph_ny_right = 2;
   }
+  if (method != "rsph" && method != "sph") throw InputError("unknown method '" + method + "' (rsph, sph)");
   s.validate();
   return opt;
 }
@@ -85,10 +86,8 @@ int run(Options opt) {
     r = scenes::run_shock(scenes::make_rsph_levels_shock(s), s, on_step, on_end);
   else if (method == "rsph")
     r = scenes::run_shock(scenes::make_rsph_shock(s), s, on_step, on_end);
-  else if (method == "sph")
+  else  // sph (parse_options refused the rest)
     r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end);
-  else
-    throw InputError("unknown method '" + method + "' (rsph, sph)");
   progress.finish();
 
   io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});

@@ -1,5 +1,5 @@
 # Runs CMD (a list) in a fresh OUT folder; passes when it exits non-zero, prints EXPECT on stderr,
-# and leaves no summary.json behind. CMD is given `--out OUT/run` unless NO_OUT is set (a tool without
+# and leaves no summary.json behind (and, for bad input, no output folder). CMD is given `--out OUT/run` unless NO_OUT is set (a tool without
 # an output folder).
 file(REMOVE_RECURSE ${OUT})
 file(MAKE_DIRECTORY ${OUT})
@@ -17,5 +17,9 @@ if(pos EQUAL -1)
 endif()
 if(EXISTS ${OUT}/run/summary.json)
   message(FATAL_ERROR "a failed run left summary.json behind")
+endif()
+# Bad input (exit 2) is refused before anything is written: not even an empty output folder is left.
+if(rc EQUAL 2 AND EXISTS ${OUT}/run)
+  message(FATAL_ERROR "bad input left an output folder behind")
 endif()
 message(STATUS "exit ${rc}: ${err}")
