@@ -77,12 +77,15 @@ struct CommonOptions {
   bool quiet = false;
 };
 
-inline void add_common_options(po::options_description& desc, CommonOptions& common) {
-  desc.add_options()("help,h", "show this help and exit")("out", value_of(common.out),
-                                                          "output folder (created if missing)")(
-      "preset", value_of(common.preset), "quick: a small run in seconds; paper: the full setup")(
-      "threads", value_of(common.threads), "OpenMP threads (0: all cores)")("quiet", po::bool_switch(&common.quiet),
-                                                                            "no progress line");
+/// --help, --out, --preset, --threads and --quiet; `quick` says what the quick preset changes (flags given
+/// keep their values).
+inline void add_common_options(po::options_description& desc, CommonOptions& common, const std::string& quick) {
+  const std::string preset = "paper: the paper's setup; quick: a small run in seconds (" + quick + ")";
+  desc.add_options()("help,h", "show this help and exit");
+  desc.add_options()("out", value_of(common.out), "output folder (created if missing)");
+  desc.add_options()("preset", value_of(common.preset), preset.c_str());
+  desc.add_options()("threads", value_of(common.threads), "OpenMP threads (0: all cores)");
+  desc.add_options()("quiet", po::bool_switch(&common.quiet), "no progress line");
 }
 
 /// --levels, --block-cells, --refine-above, --coarsen-below and --h-ramp, defaulting to c's values; `who`

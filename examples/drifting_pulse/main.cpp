@@ -29,7 +29,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [base, common, shifts_text, counts_text] = opt;
   ex::po::options_description desc("rsph-drifting-pulse options");
-  ex::add_common_options(desc, common);
+  ex::add_common_options(desc, common, "--counts 0,10,20,30,40");
   ex::Flags flag(desc);
   flag("shifts", shifts_text, "cases: T_reg v_d / Delta, comma separated");
   flag("counts", counts_text, "regularization counts to record");

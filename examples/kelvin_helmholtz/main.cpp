@@ -27,7 +27,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [s, common, method] = opt;
   ex::po::options_description desc("rsph-kelvin-helmholtz options");
-  ex::add_common_options(desc, common);
+  ex::add_common_options(desc, common, "--cells 64");
   ex::Flags flag(desc);
   flag("method", method, "rsph or sph");
   flag("conductivity", s.alpha_u, "artificial conductivity alpha_u (0: off)");

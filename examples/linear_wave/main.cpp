@@ -17,7 +17,7 @@ int main(int argc, char** argv) {
     ex::CommonOptions common;
     std::string kernel_name = "quintic";
     ex::po::options_description desc("rsph-linear-wave options");
-    ex::add_common_options(desc, common);
+    ex::add_common_options(desc, common, "--periods 20 --wavelength 12");
     ex::Flags flag(desc);
     flag("wavelength", s.wavelength_cells, "lambda / Delta (even)");
     flag("r", s.r, "RSPH: regularization period over wave period (0: plain SPH)");

@@ -83,7 +83,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [s, common, resolution, snapshot_every, map_nr, map_nphi] = opt;
   ex::po::options_description desc("rsph-planet-disk options");
-  ex::add_common_options(desc, common);
+  ex::add_common_options(desc, common, "--particles 8000 --orbits 10 --snapshot-every 5");
   ex::Flags flag(desc);
   flag("method", s.method, "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity");
   flag("eos", s.eos, "isothermal (c_s / v_K fixed) or polytropic (eq. 21)");

@@ -103,7 +103,7 @@ int main(int argc, char** argv) {
   return ex::guarded_main("rsph-sod", [&] {
     Options opt;
     ex::po::options_description desc("rsph-sod options");
-    ex::add_common_options(desc, opt.common);
+    ex::add_common_options(desc, opt.common, "--n-left 200 --snapshots 2");
     ex::Flags flag(desc);
     flag("dim", opt.dim, "1, or 2 for a strip periodic in y");
     flag("n-left", opt.sod.n_left, "particles across the left half");

@@ -27,7 +27,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [s, common, method] = opt;
   ex::po::options_description desc("rsph-strong-shock options");
-  ex::add_common_options(desc, common);
+  ex::add_common_options(desc, common,
+                         "RSPH --nx 256 --ny 6, rounded up to whole blocks on --levels; SPH 400 x 16 | 50 x 2");
   ex::Flags flag(desc);
   flag("method", method, "rsph or sph");
   flag("alpha", s.alpha, "artificial viscosity alpha");

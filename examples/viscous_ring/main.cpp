@@ -30,7 +30,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [s, common, taus] = opt;
   ex::po::options_description desc("rsph-viscous-ring options");
-  ex::add_common_options(desc, common);
+  ex::add_common_options(desc, common, "--nu 4.8e-4 --h 0.04 --bin-width 0.02");
   ex::Flags flag(desc);
   flag("nu", s.nu, "prescribed kinematic viscosity nu_s");
   flag("h", s.h, "smoothing length (R_0)");

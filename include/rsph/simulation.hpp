@@ -57,6 +57,9 @@ class Simulation {
   static_assert(check_equation_of_state<EOS, D>());
   static_assert(check_regularizer<Reg, D, EOS::has_internal_energy>());
   static_assert((check_term<Terms, D>() && ...));
+  static_assert((made_for_dimension<Terms, D>() && ...),
+                "a term made for another dimension (its `dim`) cannot join this simulation: GradH<D> and the "
+                "like take the simulation's D");
   static_assert(((!requires { Terms::needs_internal_energy; } || EOS::has_internal_energy) && ...),
                 "a term that conducts heat needs an equation of state that carries internal energy");
 

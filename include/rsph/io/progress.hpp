@@ -27,8 +27,10 @@ class Progress {
     std::fflush(stderr);
     shown_ = true;
   }
+  /// Clears the line (the summary printed next starts on a clean one).
   void finish() {
-    if (shown_) fmt::print(stderr, "\n");
+    if (shown_) fmt::print(stderr, "\r\033[K");
+    std::fflush(stderr);
     shown_ = false;
   }
   ~Progress() { finish(); }

@@ -74,6 +74,15 @@ template <class T, int D>
 concept Term = PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> ||
     PrescribedMotion<T, D> || BoundaryZone<T, D> || GradientCorrection<T>;
 
+/// Whether term T, if it names a dimension (`static constexpr int dim`), was made for dimension D.
+template <class T, int D>
+constexpr bool made_for_dimension() {
+  if constexpr (requires { T::dim; })
+    return T::dim == D;
+  else
+    return true;
+}
+
 /// Position in a pack of the first type of a kind (the kinds a simulation takes at most one of); 0 if none.
 template <std::size_t N>
 constexpr std::size_t first_of_kind(std::array<bool, N> is_kind) {

@@ -17,8 +17,9 @@ namespace rsph::physics {
 template <int D>
 struct GradH {
   static constexpr bool solves_smoothing_length = true;
-  double eta = 1.2;         ///< h = eta (m / rho)^(1/D)
-  double tolerance = 1e-6;  ///< relative change of h at which the iteration stops
+  static constexpr int dim = D;  ///< h = eta (m / rho)^(1/D) holds in this dimension only
+  double eta = 1.2;              ///< h = eta (m / rho)^(1/D)
+  double tolerance = 1e-6;       ///< relative change of h at which the iteration stops
   int max_iterations = 50;
 
   void validate() const {
