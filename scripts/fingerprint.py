@@ -12,8 +12,10 @@ import hashlib
 import os
 import sys
 
-import h5py
 import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from rsph_plot import load  # noqa: E402
 
 
 def last_snapshots(folder):
@@ -31,14 +33,14 @@ def last_snapshots(folder):
 
 def fingerprint(path, folder):
     lines = [f"file {os.path.relpath(path, folder)}"]
-    with h5py.File(path, "r") as f:
-        for name in sorted(f.attrs):
-            value = np.asarray(f.attrs[name])
-            lines.append(f"attr {name} {value.dtype.str} {hashlib.sha256(value.tobytes()).hexdigest()}")
-        for name in sorted(f):
-            data = np.ascontiguousarray(f[name][()])
-            shape = "x".join(str(s) for s in data.shape)
-            lines.append(f"data {name} {data.dtype.str} {shape} {hashlib.sha256(data.tobytes()).hexdigest()}")
+    fields, attributes = load(path)
+    for name in sorted(attributes):
+        value = np.asarray(attributes[name])
+        lines.append(f"attr {name} {value.dtype.str} {hashlib.sha256(value.tobytes()).hexdigest()}")
+    for name in sorted(fields):
+        data = np.ascontiguousarray(fields[name])
+        shape = "x".join(str(s) for s in data.shape)
+        lines.append(f"data {name} {data.dtype.str} {shape} {hashlib.sha256(data.tobytes()).hexdigest()}")
     return lines
 
 

@@ -7,12 +7,11 @@ Usage: plot_kelvin_helmholtz.py DIR [DIR ...] --png FILE
 import math
 import os
 
-import h5py
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from rsph_plot import folders_and_png, read_csv, read_summary, save_figure  # noqa: E402
+from rsph_plot import folders_and_png, load, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def main():
@@ -27,10 +26,8 @@ def main():
         if "h_over_dx" in s:  # older summaries lack it
             label += f", {'h/dx' if s['method'] == 'rsph' else 'eta'} = {s['h_over_dx']:g}"
         ax = fig.add_subplot(grid[i // 2, i % 2])
-        with h5py.File(os.path.join(d, "snap_00001.h5"), "r") as h:
-            x = h["x"][:]
-            rho = h["rho"][:]
-            t = h.attrs["time"]
+        fields, attrs = load(os.path.join(d, "snap_00001.h5"))
+        x, rho, t = fields["x"], fields["rho"], attrs["time"]
         size = 60000.0 / len(rho)
         sc = ax.scatter(x[:, 0], x[:, 1], c=rho, s=size, cmap="viridis", vmin=1, vmax=10, linewidths=0)
         ax.set_xlim(-0.5, -0.5 + s.get("wavelengths", 6) / 6)  # the box holds `wavelengths` of 1/6

@@ -13,6 +13,16 @@ def read_csv(path):
     return {k: [float(r[k]) for r in rows] for k in rows[0]}
 
 
+def load(snapshot):
+    """One snap_NNNNN.h5: (fields, attributes), each a dict; fields as numpy arrays (x and v are N x dim)."""
+    import h5py  # only the scripts that read snapshots need it
+
+    with h5py.File(snapshot, "r") as f:
+        fields = {name: f[name][()] for name in f}
+        attributes = {name: f.attrs[name] for name in f.attrs}
+    return fields, attributes
+
+
 def read_summary(folder):
     with open(os.path.join(folder, "summary.json")) as f:
         return json.load(f)
@@ -30,7 +40,7 @@ def run_example(binary, out, args, rerun=True):
     if not rerun and os.path.exists(summary):
         return read_summary(out)
     os.makedirs(out, exist_ok=True)
-    cmd = [binary, "--out", out, "--quiet", "--threads", "1"] + [str(a) for a in args]
+    cmd = [binary, "--out", out, "--overwrite", "--quiet", "--threads", "1"] + [str(a) for a in args]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr}")

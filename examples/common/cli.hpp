@@ -49,11 +49,27 @@ inline po::typed_value<double>* finite_value_of(double& field, const std::string
   });
 }
 
+/// Flags every example has, and what a run records of its parameters.
+struct CommonOptions {
+  std::string out = "out";
+  std::string preset = "paper";
+  int threads = 0;
+  bool quiet = false;
+  bool overwrite = false;
+  std::string config;        ///< a params.cfg (Boost.Program_options' config-file syntax) read under the flags
+  std::string command_line;  ///< as given, for summary.json
+  /// Every parameter as resolved (presets applied), one `name = value` line each: params.cfg.
+  std::vector<std::pair<std::string, std::string>> parameters;
+  /// While the flags are parsed: each flag's name and how to print its field (see Flags, record_run).
+  std::vector<std::pair<std::string, std::function<std::string()>>> bound;
+};
+
 /// Adds flags one per call, each bound to a field and defaulting to its value:
-/// `flag("cells", s.cells, "lattice cells")("h-over-dx", s.h_over_dx, "h / Delta")`. A bool field is a switch.
+/// `flag("cells", s.cells, "lattice cells")("h-over-dx", s.h_over_dx, "h / Delta")`. A bool field is a switch, a
+/// double must be finite. Each flag is also noted in `common`, so record_run can write what was resolved.
 class Flags {
  public:
-  explicit Flags(po::options_description& desc) : desc_(desc) {}
+  Flags(po::options_description& desc, CommonOptions& common) : desc_(desc), common_(common) {}
   template <class T>
   Flags& operator()(const char* name, T& field, const char* help) {
     if constexpr (std::is_same_v<T, bool>)
@@ -62,49 +78,54 @@ class Flags {
       desc_.add_options()(name, finite_value_of(field, name), help);
     else
       desc_.add_options()(name, value_of(field), help);
+    common_.bound.emplace_back(name, [&field] { return default_text(field); });
     return *this;
   }
+  po::options_description& description() { return desc_; }
 
  private:
   po::options_description& desc_;
+  CommonOptions& common_;
 };
 
-/// Flags every example has.
-struct CommonOptions {
-  std::string out = "out";
-  std::string preset = "paper";
-  int threads = 0;
-  bool quiet = false;
-};
-
-/// --help, --out, --preset, --threads and --quiet; `quick` says what the quick preset changes (flags given
-/// keep their values).
-inline void add_common_options(po::options_description& desc, CommonOptions& common, const std::string& quick) {
+/// --help, --out, --preset, --threads, --quiet, --overwrite and --config; `quick` says what the quick preset
+/// changes (flags given keep their values).
+inline void add_common_options(Flags& flag, CommonOptions& common, const std::string& quick) {
   const std::string preset = "paper: the paper's setup; quick: a small run in seconds (" + quick + ")";
+  auto& desc = flag.description();
   desc.add_options()("help,h", "show this help and exit");
   desc.add_options()("out", value_of(common.out), "output folder (created if missing)");
-  desc.add_options()("preset", value_of(common.preset), preset.c_str());
-  desc.add_options()("threads", value_of(common.threads), "OpenMP threads (0: all cores)");
-  desc.add_options()("quiet", po::bool_switch(&common.quiet), "no progress line");
+  desc.add_options()("config", po::value(&common.config),
+                     "read parameters from FILE (name = value lines, as a run's params.cfg); flags given win");
+  desc.add_options()("overwrite", po::bool_switch(&common.overwrite),
+                     "reuse an output folder that holds an earlier run, removing that run's files first");
+  flag("preset", common.preset, preset.c_str());
+  flag("threads", common.threads, "OpenMP threads (0: all cores)");
+  flag("quiet", common.quiet, "no progress line");
 }
 
 /// --levels, --block-cells, --refine-above, --coarsen-below and --h-ramp, defaulting to c's values; `who`
 /// starts each help line, `levels_help` says what --levels means in the scene.
-inline void add_level_options(po::options_description& desc, DensityJumpLevels& c, const std::string& who,
+inline void add_level_options(Flags& flag, DensityJumpLevels& c, const std::string& who,
                               const std::string& levels_help) {
-  desc.add_options()("levels", value_of(c.levels), (who + ": " + levels_help).c_str())(
-      "block-cells", value_of(c.block_cells), (who + ": level-0 cells per block").c_str())(
-      "refine-above", value_of(c.refine_above),
-      (who + ": relative density jump between level-0 cells that refines a block").c_str())(
-      "coarsen-below", value_of(c.coarsen_below), (who + ": jump below which a block returns to level 0").c_str())(
-      "h-ramp", value_of(c.h_ramp),
-      (who + ": coarser spacings over which h rises towards a coarser block (0: h jumps)").c_str());
+  flag("levels", c.levels, (who + ": " + levels_help).c_str());
+  flag("block-cells", c.block_cells, (who + ": level-0 cells per block").c_str());
+  flag("refine-above", c.refine_above,
+       (who + ": relative density jump between level-0 cells that refines a block").c_str());
+  flag("coarsen-below", c.coarsen_below, (who + ": jump below which a block returns to level 0").c_str());
+  flag("h-ramp", c.h_ramp,
+       (who + ": coarser spacings over which h rises towards a coarser block (0: h jumps)").c_str());
 }
 
 /// Parses argv; returns false when --help was shown. Unknown flags throw with their name.
 inline bool parse(int argc, char** argv, const po::options_description& desc, po::variables_map& vm,
                   const std::string& usage) {
   po::store(po::parse_command_line(argc, argv, desc), vm);
+  if (vm.count("config") && !vm.count("help")) {  // under the command line: a flag given there wins
+    const std::string file = vm["config"].as<std::string>();
+    if (!std::filesystem::is_regular_file(file)) throw InputError("--config: no file '" + file + "'");
+    po::store(po::parse_config_file<char>(file.c_str(), desc), vm);
+  }
   if (vm.count("help")) {
     fmt::print("{}\n\n{}", usage, [&] {
       std::ostringstream s;
@@ -154,12 +175,45 @@ inline void apply_threads(int threads) {
 #endif
 }
 
-/// Prepares the output folder; removes a summary.json left by an earlier run so a failed run never
-/// leaves an old result looking like its own.
-inline std::filesystem::path prepare_output(const std::string& out) {
-  const std::filesystem::path dir(out);
+/// After the presets: every bound flag's resolved value (out, config and overwrite aside: they say where, not
+/// what) and the command line, into `common` for params.cfg and summary.json.
+inline void record_run(CommonOptions& common, int argc, char** argv) {
+  common.parameters.clear();
+  for (const auto& [name, text] : common.bound) common.parameters.emplace_back(name, text());
+  common.bound.clear();  // they refer to the fields being parsed
+  common.command_line.clear();
+  for (int i = 0; i < argc; ++i) common.command_line += (i ? " " : "") + std::string(argv[i]);
+}
+
+/// Whether a file or folder in an output folder is one a run of these programs writes.
+inline bool run_output(const std::filesystem::path& entry) {
+  const std::string name = entry.filename().string();
+  const std::string ext = entry.extension().string();
+  if (std::filesystem::is_directory(entry)) return name.rfind("shift_", 0) == 0;  // the drifting pulse's cases
+  return name.rfind("snap_", 0) == 0 || ext == ".csv" || ext == ".h5" || ext == ".xmf" || ext == ".png" ||
+         name == "summary.json" || name == "params.cfg" ||
+         (name.size() > 8 && name.rfind(".partial") == name.size() - 8);
+}
+
+/// Prepares the output folder: refuses one that holds an earlier run's files unless --overwrite, which removes
+/// those files first (and nothing else); then writes params.cfg, every resolved parameter, so that
+/// `--config DIR/params.cfg` repeats the run.
+inline std::filesystem::path prepare_output(const CommonOptions& common) {
+  const std::filesystem::path dir(common.out);
+  if (std::filesystem::is_directory(dir)) {
+    std::vector<std::filesystem::path> earlier;
+    for (const auto& e : std::filesystem::directory_iterator(dir))
+      if (run_output(e.path())) earlier.push_back(e.path());
+    if (!earlier.empty() && !common.overwrite)
+      throw InputError("the output folder '" + dir.string() + "' holds an earlier run (" +
+                       earlier.front().filename().string() + " and " + std::to_string(earlier.size() - 1) +
+                       " more): choose another --out, or pass --overwrite to replace it");
+    for (const auto& e : earlier) std::filesystem::remove_all(e);
+  }
   io::ensure_directory(dir);
-  std::filesystem::remove(dir / "summary.json");
+  std::string cfg = "# " + common.command_line + "\n";
+  for (const auto& [name, value] : common.parameters) cfg += name + " = " + value + "\n";
+  io::write_text_file(dir / "params.cfg", cfg);
   return dir;
 }
 

@@ -4,6 +4,7 @@
 // leaving the domain, the conservation log), a hook at the start and at each stop (snapshots, measures),
 // the cost recorded the same way for all, and a progress line. The figures every summary.json carries
 // are written by one function too.
+#include "common/cli.hpp"
 #include "common/run_helpers.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
 #include "rsph/io/json.hpp"
@@ -109,6 +110,13 @@ inline void write_cost(io::Json& summary, const RunCost& cost) {
   summary.set("mean_particles", cost.mean_particles);
   summary.set("regularizations", cost.regularizations).set("regularization_seconds", cost.phases.regularization);
   summary.set("phase_seconds", phase_json(cost.phases));
+}
+
+/// What describes the run: every resolved parameter, the command line and the version of rsph.
+inline void write_run_record(io::Json& summary, const CommonOptions& common) {
+  io::Json parameters;
+  for (const auto& [name, value] : common.parameters) parameters.set(name, value);
+  summary.set("parameters", parameters).set("command_line", common.command_line).set("version", RSPH_VERSION);
 }
 
 /// What the scheme of `sim` did, where it has it: the level counts of a multi-level lattice and the

@@ -29,8 +29,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [base, common, shifts_text, counts_text] = opt;
   ex::po::options_description desc("rsph-drifting-pulse options");
-  ex::add_common_options(desc, common, "--counts 0,10,20,30,40");
-  ex::Flags flag(desc);
+  ex::Flags flag(desc, common);
+  ex::add_common_options(flag, common, "--counts 0,10,20,30,40");
   flag("shifts", shifts_text, "cases: T_reg v_d / Delta, comma separated");
   flag("counts", counts_text, "regularization counts to record");
   flag("cells", base.cells, "lattice sites on the periodic line");
@@ -46,6 +46,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   if (ex::quick_preset(common)) {
     if (vm["counts"].defaulted()) counts_text = "0,10,20,30,40";
   }
+  ex::record_run(common, argc, argv);
   return opt;
 }
 
@@ -60,7 +61,7 @@ int run(Options opt) {
   }
   std::sort(counts.begin(), counts.end());
   base.validate();
-  const auto dir = ex::prepare_output(common.out);
+  const auto dir = ex::prepare_output(common);
   const auto wall0 = std::chrono::steady_clock::now();
   io::Json summary, cases;
   summary.set("test", "drifting_pulse").set("cells", base.cells).set("h_over_dx", base.h_over_dx);
@@ -108,6 +109,7 @@ int run(Options opt) {
   summary.set("cases", cases).set("wall_seconds", wall).set("steps", steps);
   summary.set("particle_updates_per_second", static_cast<double>(updates) / wall);
   summary.set("regularization_seconds", reg_seconds);
+  ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
   fmt::print("output: {}\n", dir.string());
   return 0;

@@ -27,8 +27,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [s, common, method] = opt;
   ex::po::options_description desc("rsph-kelvin-helmholtz options");
-  ex::add_common_options(desc, common, "--cells 64");
-  ex::Flags flag(desc);
+  ex::Flags flag(desc, common);
+  ex::add_common_options(flag, common, "--cells 64");
   flag("method", method, "rsph or sph");
   flag("conductivity", s.alpha_u, "artificial conductivity alpha_u (0: off)");
   flag("cells", s.cells, "1 / Delta");
@@ -50,13 +50,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
   }
   if (method != "rsph" && method != "sph") throw InputError("unknown method '" + method + "' (rsph, sph)");
   s.validate();
+  ex::record_run(common, argc, argv);
   return opt;
 }
 
 int run(Options opt) {
   auto& [s, common, method] = opt;
   ex::apply_threads(common.threads);
-  const auto dir = ex::prepare_output(common.out);
+  const auto dir = ex::prepare_output(common);
   io::Progress progress("rsph-kelvin-helmholtz " + method, s.end_time());
   auto on_step = [&](const auto& sim) {
     if (!common.quiet) progress.update(sim.time(), sim.steps());
@@ -95,6 +96,7 @@ int run(Options opt) {
   summary.set("energy_error", r.energy_error);
   ex::write_cost(summary, r);
   summary.merge(scheme);
+  ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
   std::string line = fmt::format(
       "rsph-kelvin-helmholtz {} alpha_u = {}: {} particles, {} steps, {:.1f} s; amplitude "

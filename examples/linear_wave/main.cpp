@@ -17,8 +17,8 @@ int main(int argc, char** argv) {
     ex::CommonOptions common;
     std::string kernel_name = "quintic";
     ex::po::options_description desc("rsph-linear-wave options");
-    ex::add_common_options(desc, common, "--periods 20 --wavelength 12");
-    ex::Flags flag(desc);
+    ex::Flags flag(desc, common);
+    ex::add_common_options(flag, common, "--periods 20 --wavelength 12");
     flag("wavelength", s.wavelength_cells, "lambda / Delta (even)");
     flag("r", s.r, "RSPH: regularization period over wave period (0: plain SPH)");
     flag("alpha", s.alpha, "plain SPH (r = 0): artificial viscosity alpha; beta = 2 alpha");
@@ -38,8 +38,9 @@ int main(int argc, char** argv) {
       if (vm["wavelength"].defaulted()) s.wavelength_cells = 12;
     }
     s.validate();
+    ex::record_run(common, argc, argv);
     ex::apply_threads(common.threads);
-    const auto dir = ex::prepare_output(common.out);
+    const auto dir = ex::prepare_output(common);
     io::Progress progress("rsph-linear-wave", s.periods * s.period());
     auto on_step = [&](const auto& sim) {
       if (!common.quiet) progress.update(sim.time(), sim.steps());
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
     ex::write_cost(summary, res);
     summary.set("cpu_seconds", ex::cpu_seconds());
     summary.set("kinetic_energy_dissipated", res.dissipated);
+    ex::write_run_record(summary, common);
     summary.write(dir / "summary.json");
     fmt::print(
         "rsph-linear-wave {} lambda = {} Delta, {}: gamma = {:.3e}, phase error = {:.2e}, amplitude x{:.4f}, "

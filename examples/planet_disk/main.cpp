@@ -83,8 +83,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [s, common, resolution, snapshot_every, map_nr, map_nphi] = opt;
   ex::po::options_description desc("rsph-planet-disk options");
-  ex::add_common_options(desc, common, "--particles 8000 --orbits 10 --snapshot-every 5");
-  ex::Flags flag(desc);
+  ex::Flags flag(desc, common);
+  ex::add_common_options(flag, common, "--particles 8000 --orbits 10 --snapshot-every 5");
   flag("method", s.method, "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity");
   flag("eos", s.eos, "isothermal (c_s / v_K fixed) or polytropic (eq. 21)");
   flag("q", s.q, "M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune");
@@ -134,13 +134,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
   s.validate();
   require(snapshot_every > 0.0, "--snapshot-every must be positive");
   require(map_nr >= 2 && map_nphi >= 4, "the Sigma map needs at least 2 x 4 cells");
+  ex::record_run(common, argc, argv);
   return opt;
 }
 
 int run(Options opt) {
   auto& [s, common, resolution, snapshot_every, map_nr, map_nphi] = opt;
   ex::apply_threads(common.threads);
-  const auto dir = ex::prepare_output(common.out);
+  const auto dir = ex::prepare_output(common);
   const double period = s.period();
   io::Progress progress(fmt::format("rsph-planet-disk {} {}", s.method, s.eos), s.orbits * period);
   io::CsvWriter timeline(dir / "timeline.csv", {"orbit", "time", "mass", "mass_removed", "gap_depth", "particles",
@@ -184,6 +185,7 @@ int run(Options opt) {
   ex::write_cost(summary, r);
   summary.set("cpu_seconds", ex::cpu_seconds()).set("remap_seconds", r.remap_seconds);
   summary.set("phase_seconds", phases).set("timeline", mass_over_time);
+  ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
   fmt::print(
       "rsph-planet-disk {} {} q = {}: {} particles, {} steps, {} regularizations, {:.1f} s ({:.2f} M updates/s); "

@@ -29,7 +29,7 @@ struct Options {
 
 template <int D, class Kernel, class Sim>
 int run(const Options& opt, Sim sim) {
-  const auto dir = ex::prepare_output(opt.common.out);
+  const auto dir = ex::prepare_output(opt.common);
   const analysis::ExactRiemann exact(opt.sod.left, opt.sod.right, opt.sod.gamma);
   const auto start = sim.totals();
   ex::ConservationLog<D> log(dir / "conservation.csv");
@@ -71,6 +71,7 @@ int run(const Options& opt, Sim sim) {
   ex::write_scheme(summary, sim);
   if constexpr (requires { sim.regularizer().log(); })
     summary.set("max_level", opt.rsph.refinement.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
+  ex::write_run_record(summary, opt.common);
   summary.write(dir / "summary.json");
   fmt::print(
       "rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
@@ -103,8 +104,8 @@ int main(int argc, char** argv) {
   return ex::guarded_main("rsph-sod", [&] {
     Options opt;
     ex::po::options_description desc("rsph-sod options");
-    ex::add_common_options(desc, opt.common, "--n-left 200 --snapshots 2");
-    ex::Flags flag(desc);
+    ex::Flags flag(desc, opt.common);
+    ex::add_common_options(flag, opt.common, "--n-left 200 --snapshots 2");
     flag("dim", opt.dim, "1, or 2 for a strip periodic in y");
     flag("n-left", opt.sod.n_left, "particles across the left half");
     flag("ny-left", opt.sod.ny_left, "2D: particles across the strip (left state)");
@@ -123,7 +124,7 @@ int main(int argc, char** argv) {
     flag("gradient-tolerance", opt.gradient.tolerance, "rsph: relative residual of the consistent-gradient solve");
     flag("max-bin", opt.rsph.max_bin,
          "rsph: individual time steps in power-of-two bins down to 2^-max-bin of the longest (0: global)");
-    ex::add_level_options(desc, opt.rsph.refinement, "rsph",
+    ex::add_level_options(flag, opt.rsph.refinement, "rsph",
                           "finest level L (0: uniform); the finest spacing is 0.5 / n-left");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
@@ -135,6 +136,7 @@ int main(int argc, char** argv) {
       if (vm["snapshots"].defaulted()) opt.snapshots = 2;
     }
     require(opt.snapshots >= 1, "--snapshots must be at least 1 (got " + std::to_string(opt.snapshots) + ")");
+    ex::record_run(opt.common, argc, argv);
     ex::apply_threads(opt.common.threads);
     if (opt.dim == 1) return run_kernel<1>(opt);
     if (opt.dim == 2) return run_kernel<2>(opt);

@@ -27,9 +27,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [s, common, method] = opt;
   ex::po::options_description desc("rsph-strong-shock options");
-  ex::add_common_options(desc, common,
+  ex::Flags flag(desc, common);
+  ex::add_common_options(flag, common,
                          "RSPH --nx 256 --ny 6, rounded up to whole blocks on --levels; SPH 400 x 16 | 50 x 2");
-  ex::Flags flag(desc);
   flag("method", method, "rsph or sph");
   flag("alpha", s.alpha, "artificial viscosity alpha");
   flag("beta", s.beta, "artificial viscosity beta");
@@ -44,7 +44,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("eta", s.eta, "SPH: h = eta (m / rho)^(1/2)");
   flag("t-end", s.t_end, "end time");
   flag("courant", s.courant, "Courant factor");
-  ex::add_level_options(desc, s.refinement, "RSPH",
+  ex::add_level_options(flag, s.refinement, "RSPH",
                         "finest level of a lattice in factors of two (0: uniform); nx, ny count finest cells");
   ex::po::variables_map vm;
   if (!ex::parse(argc, argv, desc, vm,
@@ -66,13 +66,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
   }
   if (method != "rsph" && method != "sph") throw InputError("unknown method '" + method + "' (rsph, sph)");
   s.validate();
+  ex::record_run(common, argc, argv);
   return opt;
 }
 
 int run(Options opt) {
   auto& [s, common, method] = opt;
   ex::apply_threads(common.threads);
-  const auto dir = ex::prepare_output(common.out);
+  const auto dir = ex::prepare_output(common);
   io::Progress progress("rsph-strong-shock " + method, s.t_end);
   auto on_step = [&](const auto& sim) {
     if (!common.quiet) progress.update(sim.time(), sim.steps());
@@ -112,6 +113,7 @@ int run(Options opt) {
   ex::write_cost(summary, r);
   summary.merge(scheme);
   if (method == "rsph") summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels));
+  ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
   fmt::print(
       "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"

@@ -30,8 +30,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
   auto& [s, common, taus] = opt;
   ex::po::options_description desc("rsph-viscous-ring options");
-  ex::add_common_options(desc, common, "--nu 4.8e-4 --h 0.04 --bin-width 0.02");
-  ex::Flags flag(desc);
+  ex::Flags flag(desc, common);
+  ex::add_common_options(flag, common, "--nu 4.8e-4 --h 0.04 --bin-width 0.02");
   flag("nu", s.nu, "prescribed kinematic viscosity nu_s");
   flag("h", s.h, "smoothing length (R_0)");
   flag("h-over-dx", s.h_over_dx, "h / Delta");
@@ -61,13 +61,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
   }
   s.taus = ex::parse_numbers(taus, "--taus");
   s.validate();
+  ex::record_run(common, argc, argv);
   return opt;
 }
 
 int run(Options opt) {
   auto& [s, common, taus] = opt;
   ex::apply_threads(common.threads);
-  const auto dir = ex::prepare_output(common.out);
+  const auto dir = ex::prepare_output(common);
   const double t_end = s.time_of(s.taus.back());
   io::Progress progress("rsph-viscous-ring c_r=" + std::to_string(s.cycle), t_end);
   ex::ConservationLog<2> conservation(dir / "conservation.csv");
@@ -120,6 +121,7 @@ int run(Options opt) {
   summary.set("particles_mean", r.mean_particles);
   ex::write_cost(summary, r);
   summary.set("cpu_seconds", ex::cpu_seconds()).set("snapshots", snaps);
+  ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
   fmt::print(
       "rsph-viscous-ring c_r = {} x {}, h/Delta = {}, h = {}: {} particles, {} steps, {} regularizations, {:.1f} s; "
