@@ -7,7 +7,7 @@ packages=(
   build-essential cmake pkg-config
   libeigen3-dev libboost-dev libboost-program-options-dev
   libfmt-dev catch2 libbenchmark-dev libhdf5-dev
-  python3 python3-matplotlib python3-numpy python3-h5py
+  python3 python3-matplotlib python3-numpy python3-h5py python3-meshio
   clang-format
 )
 

@@ -2,6 +2,7 @@
 // Files appear whole or not at all: written to a temporary name in the same folder, then renamed.
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -33,6 +34,13 @@ inline void write_text_file(const std::filesystem::path& target, const std::stri
     if (!out) throw std::runtime_error("failed writing " + tmp.string());
   }
   commit_file(tmp, target);
+}
+
+/// The whole of a text file; an error names the path.
+inline std::string read_text_file(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error("cannot read " + path.string());
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
 }
 
 /// Creates the output folder (and parents); an error names the path.
