@@ -261,7 +261,6 @@ TEST_CASE("sparse, clustered and outlying sets in walled boxes: every cell exact
     for (std::size_t a = 0; a < x.size(); ++a) worst = std::max(worst, std::abs(local[a] - oracle[a]) / oracle[a]);
     CHECK(worst < 1e-10);
   };
-  int cases = 0;
   for (unsigned seed = 0; seed < 200; ++seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -270,9 +269,7 @@ TEST_CASE("sparse, clustered and outlying sets in walled boxes: every cell exact
     for (int i = 0; i < n; ++i) x.push_back(seed % 3 == 0 ? Point(0.1 * u(rng), 0.1 * u(rng)) : Point(u(rng), u(rng)));
     INFO("seed " << seed << ", " << n << " particles");
     check(x, box_with(Edge::reflecting, Edge::reflecting));
-    ++cases;
   }
-  CHECK(cases == 200);
   // A cluster of 3000 and three far outliers in the corners of a walled box.
   std::mt19937 rng(7);
   std::normal_distribution<double> g(0.3, 0.01);
