@@ -8,7 +8,6 @@
 #include "common/run_helpers.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
 #include "rsph/io/json.hpp"
-#include "rsph/io/progress.hpp"
 
 #include <cstdint>
 #include <filesystem>
@@ -65,11 +64,10 @@ struct NoHook {
 };
 
 /// Steps `sim` through `stops` in turn. after_step(sim) follows every call of step() (a block of
-/// individual steps is one call); at_stop(sim, k) comes at the start (k = -1) and at each stop k. The
-/// progress line, when given, shows simulated time. Returns what the run cost.
+/// individual steps is one call; the programs update their progress line there); at_stop(sim, k) comes
+/// at the start (k = -1) and at each stop k. Returns what the run cost.
 template <class Sim, class Stop, class AfterStep, class AtStop>
-RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_step, AtStop&& at_stop,
-                  io::Progress* progress = nullptr) {
+RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_step, AtStop&& at_stop) {
   RunCost cost;
   cost.begin(sim);
   at_stop(sim, -1);
@@ -79,12 +77,10 @@ RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_st
       sim.step(stops[k].dt_limit(sim));
       after_step(sim);
       cost.count_steps(sim, steps_before);
-      if (progress) progress->update(sim.time(), sim.steps());
     }
     at_stop(sim, static_cast<int>(k));
   }
   cost.finish(sim);
-  if (progress) progress->finish();
   return cost;
 }
 

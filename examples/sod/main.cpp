@@ -38,8 +38,12 @@ int run(const Options& opt, Sim sim) {
   io::Progress progress(fmt::format("rsph-sod {}D {}", D, opt.method), opt.sod.t_end);
   const auto cost = ex::run_stops(
       sim, ex::evenly(opt.sod.t_end, opt.snapshots),
-      [&](const auto& s) { log.record(s.time(), s.steps(), s.totals()); },
-      [&](const auto& s, int) { snapshots.write(s); }, opt.common.quiet ? nullptr : &progress);
+      [&](const auto& s) {
+        log.record(s.time(), s.steps(), s.totals());
+        if (!opt.common.quiet) progress.update(s.time(), s.steps());
+      },
+      [&](const auto& s, int) { snapshots.write(s); });
+  progress.finish();
   log.close();
 
   const auto& p = sim.particles();
