@@ -2,7 +2,7 @@
 // Boost.Polygon) and the full remap (cells, overlaps, new particles), on a jittered lattice and on a
 // lattice sheared as by Keplerian rotation, and the full remap against the jitter's amplitude (the cost of
 // disorder), a Keplerian disk with open edges as the planet-disk test remaps it, and the remap onto a hexagonal
-// lattice. items_per_second = old
+// lattice; and the second-order remap (remap_second/...) on the sets of remap/.... items_per_second = old
 // particles per second.
 #include "rsph/rsph.hpp"
 
@@ -39,18 +39,25 @@ void BM_cells(benchmark::State& state) {
   state.SetComplexityN(static_cast<std::int64_t>(p.n_real));
 }
 
-/// Times remaps of p0 onto `lattice` in `box`, cells closed by `region`; returns the new particle count.
-template <class Lattice, bool E, class Region = region::Unbounded>
+/// Times remaps of p0 onto `lattice` in `box`, cells closed by `region`, of the given order; returns the new
+/// particle count.
+template <class Order = regularize::FirstOrder, class Lattice, bool E, class Region = region::Unbounded>
 std::size_t time_remaps(benchmark::State& state, const ParticleSet<2, E>& p0, Lattice& lattice,
                         const Box<2>& box = domain(), const regularize::RemapParams& params = {},
                         const Region& region = {}) {
-  // As in a run: the builder and the workspace persist from remap to remap, and so does the particle
+  // As in a run: the builder and the workspaces persist from remap to remap, and so does the particle
   // storage (copy-assigned, not reallocated).
   geometry::LocalVoronoi builder;
   regularize::RemapWorkspace<2> workspace;
+  regularize::second_order::Workspace<2> second;
   std::size_t n_after = 0;
   auto p = p0;
-  auto remap = [&] { return regularize::remap_onto_lattice(p, box, lattice, builder, params, region, &workspace); };
+  auto remap = [&] {
+    if constexpr (Order::order == 2)
+      return regularize::remap_second_order(p, box, lattice, builder, params, {}, region, &workspace, &second);
+    else
+      return regularize::remap_onto_lattice(p, box, lattice, builder, params, region, &workspace);
+  };
   remap();  // untimed: the first remap faults in the storage every later one reuses
   for (auto _ : state) {
     state.PauseTiming();
@@ -64,11 +71,12 @@ std::size_t time_remaps(benchmark::State& state, const ParticleSet<2, E>& p0, La
   return n_after;
 }
 
+template <class Order = regularize::FirstOrder>
 void BM_remap(benchmark::State& state) {
   bench::use_threads(state);
   const auto p0 = make_set(state.range(0), static_cast<int>(state.range(1)));
   lattice::Square square{spacing_of(p0)};
-  time_remaps(state, p0, square);
+  time_remaps<Order>(state, p0, square);
 }
 
 // Arguments: {particles, jitter in hundredths of a spacing, threads}.
@@ -176,7 +184,8 @@ void register_family(const std::string& name, Fn fn) {
 int main(int argc, char** argv) {
   register_family("cells_local", BM_cells<geometry::LocalVoronoi>);
   register_family("cells_boost_polygon", BM_cells<geometry::BoostVoronoi>);
-  register_family("remap", BM_remap);
+  register_family("remap", BM_remap<>);
+  register_family("remap_second", BM_remap<regularize::SecondOrder>);
   register_family("remap_two_levels", BM_remap_two_levels);
   register_family("remap_hexagonal", BM_remap_hexagonal);
   for (int t : {1, 0}) {

@@ -3,7 +3,7 @@
 # (cachegrind's branch simulator), per remap of a benchmark set. On a shared machine timings drift by tens of
 # per cent from minute to minute; these counts repeat to the last digit, so two builds compare at once.
 #
-#   bash scripts/remap-cost.sh [jittered|sheared] [PARTICLES]     (defaults: jittered 100000)
+#   bash scripts/remap-cost.sh [jittered|sheared] [PARTICLES] [first|second]   (defaults: jittered 100000 first)
 #
 # Runs build/bin/remap_cost (built with -DRSPH_BUILD_BENCHMARKS=ON; RSPH_BUILD_DIR picks another build) under
 # cachegrind with one and with three remaps, on one thread, and prints the difference over two, then where it
@@ -13,6 +13,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build=${RSPH_BUILD_DIR:-$root/build}
 layout=${1:-jittered}
 particles=${2:-100000}
+order=${3:-first}
 tool=$build/bin/remap_cost
 [[ -x $tool ]] || { echo "remap-cost: $tool is missing; build with -DRSPH_BUILD_BENCHMARKS=ON" >&2; exit 1; }
 if ! command -v valgrind >/dev/null; then
@@ -22,7 +23,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 for remaps in 1 3; do
   OMP_NUM_THREADS=1 valgrind --tool=cachegrind --cache-sim=no --branch-sim=yes \
-    --cachegrind-out-file="$work/out.$remaps" "$tool" "$layout" "$particles" "$remaps" >"$work/stdout.$remaps" \
+    --cachegrind-out-file="$work/out.$remaps" "$tool" "$layout" "$particles" "$remaps" "$order" >"$work/stdout.$remaps" \
     2>"$work/log.$remaps" || { cat "$work/log.$remaps" >&2; exit 1; }
 done
 count() {  # count LABEL LOG: the first number after the label

@@ -88,6 +88,12 @@ class Flags {
   CommonOptions& common_;
 };
 
+/// --remap: the order of an RSPH scene's remap, bound to its params field.
+inline void add_remap_flag(Flags& flag, std::string& remap) {
+  flag("remap", remap,
+       "RSPH: the remap's order, first (the paper's eqs. 6-9) or second (limited linear reconstruction)");
+}
+
 /// --help, --out, --preset, --threads, --quiet, --overwrite and --config; `quick` says what the quick preset
 /// changes (flags given keep their values).
 inline void add_common_options(Flags& flag, CommonOptions& common, const std::string& quick) {

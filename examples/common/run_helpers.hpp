@@ -3,6 +3,7 @@
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/json.hpp"
+#include "rsph/regularize/remap_order.hpp"
 #include "rsph/simulation.hpp"
 
 #include <array>
@@ -13,6 +14,18 @@
 #include <vector>
 
 namespace rsph::examples {
+
+/// The remap orders a scene's RSPH method offers (`--remap`).
+inline void check_remap(const std::string& remap) {
+  require(remap == "first" || remap == "second", "unknown remap '" + remap + "' (first, second)");
+}
+
+/// Calls run(regularize::FirstOrder{}) or run(regularize::SecondOrder{}) as `remap` says.
+template <class Run>
+decltype(auto) with_remap(const std::string& remap, Run&& run) {
+  if (remap == "second") return run(regularize::SecondOrder{});
+  return run(regularize::FirstOrder{});
+}
 
 /// conservation.csv: one row per step of the conserved totals.
 template <int D>

@@ -37,6 +37,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("pulse-width", base.pulse_width, "pulse width in spacings");
   flag("contrast", base.contrast, "pulse density over the background");
   flag("h-over-dx", base.h_over_dx, "h / Delta");
+  ex::add_remap_flag(flag, base.remap);
   ex::po::variables_map vm;
   if (!ex::parse(
           argc, argv, desc, vm,
@@ -65,44 +66,47 @@ int run(Options opt) {
   const auto wall0 = std::chrono::steady_clock::now();
   io::Json summary, cases;
   summary.set("test", "drifting_pulse").set("cells", base.cells).set("h_over_dx", base.h_over_dx);
+  summary.set("remap", base.remap);
   std::uint64_t steps = 0, updates = 0;
   double reg_seconds = 0.0;
   io::CsvWriter widths(dir / "widths.csv", {"shift", "regularizations", "width_mass"});
   for (double shift : shifts) {
     auto s = base;
     s.shift = shift;
-    auto sim = scenes::make_drifting_pulse(s);
-    const double m0 = sim.totals().mass;
-    const std::string tag = fmt::format("{:g}", shift);
-    const auto case_dir = dir / ("shift_" + tag);
-    io::ensure_directory(case_dir);
-    io::Json width_json;
-    std::vector<ex::AfterRegularizations> stops;
-    for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
-    ex::Snapshots snapshots(case_dir);
-    const auto cost = ex::run_stops(sim, stops, ex::NoHook{}, [&](const auto& sm, int k) {
-      if (k < 0) return;
-      const int count = counts[static_cast<std::size_t>(k)];
-      const auto x = scenes::comoving_positions(sm, s.v_drift);
-      const auto& p = sm.particles();
-      io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
-      for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
-      csv.close();
-      snapshots.write(sm);
-      const double w = scenes::pulse_width_mass(sm, s);
-      width_json.set(std::to_string(count), w);
-      widths.row({shift, static_cast<double>(count), w});
+    ex::with_remap(s.remap, [&](auto order) {
+      auto sim = scenes::make_drifting_pulse(s, order);
+      const double m0 = sim.totals().mass;
+      const std::string tag = fmt::format("{:g}", shift);
+      const auto case_dir = dir / ("shift_" + tag);
+      io::ensure_directory(case_dir);
+      io::Json width_json;
+      std::vector<ex::AfterRegularizations> stops;
+      for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
+      ex::Snapshots snapshots(case_dir);
+      const auto cost = ex::run_stops(sim, stops, ex::NoHook{}, [&](const auto& sm, int k) {
+        if (k < 0) return;
+        const int count = counts[static_cast<std::size_t>(k)];
+        const auto x = scenes::comoving_positions(sm, s.v_drift);
+        const auto& p = sm.particles();
+        io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
+        for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
+        csv.close();
+        snapshots.write(sm);
+        const double w = scenes::pulse_width_mass(sm, s);
+        width_json.set(std::to_string(count), w);
+        widths.row({shift, static_cast<double>(count), w});
+      });
+      const double mass_error = ex::relative_change(sim.totals().mass, m0);
+      io::Json c;
+      c.set("width_mass", width_json).set("mass_error", mass_error).set("regularizations", sim.regularizations());
+      c.set("kinetic_energy_dissipated", sim.kinetic_energy_removed());
+      cases.set(tag, c);
+      steps += cost.steps;
+      updates += cost.updates;
+      reg_seconds += cost.phases.regularization;
+      fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", tag, counts.back(),
+                 scenes::pulse_width_mass(sim, s), mass_error);
     });
-    const double mass_error = ex::relative_change(sim.totals().mass, m0);
-    io::Json c;
-    c.set("width_mass", width_json).set("mass_error", mass_error).set("regularizations", sim.regularizations());
-    c.set("kinetic_energy_dissipated", sim.kinetic_energy_removed());
-    cases.set(tag, c);
-    steps += cost.steps;
-    updates += cost.updates;
-    reg_seconds += cost.phases.regularization;
-    fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", tag, counts.back(),
-               scenes::pulse_width_mass(sim, s), mass_error);
   }
   widths.close();
   const double wall = ex::seconds_since(wall0);

@@ -1,6 +1,7 @@
 #pragma once
 // §2.1 of the paper: a force-free 1D square density pulse drifting with v_d through a periodic line,
 // regularized every T_reg; the remap alone diffuses it, most when T_reg v_d / Delta = 1/2.
+#include "common/run_helpers.hpp"
 #include "rsph/rsph.hpp"
 
 #include <cmath>
@@ -16,6 +17,7 @@ struct DriftingPulseParams {
   double h_over_dx = 1.4;  ///< the paper: h = 1.4 Delta
   double shift = 0.5;      ///< T_reg v_d / Delta
   double v_drift = 1.0;
+  std::string remap = "first";  ///< the remap's order, first (eqs. 6-9) or second
 
   void validate() const {
     require(cells >= 8, "drifting pulse: need at least 8 lattice cells (got " + std::to_string(cells) + ")");
@@ -25,17 +27,20 @@ struct DriftingPulseParams {
     require(shift > 0.0, "drifting pulse: T_reg v_d / Delta must be positive");
     require(v_drift > 0.0, "drifting pulse: the drift speed must be positive");
     require(contrast > 0.0, "drifting pulse: the density contrast must be positive");
+    examples::check_remap(remap);
   }
   double spacing() const { return 1.0 / cells; }
   double T_reg() const { return shift * spacing() / v_drift; }
 };
 
-using DriftRegularizer = regularize::LatticeRegularizer<lattice::Uniform1D, schedule::EveryT>;
-template <class Kernel = kernel::CubicSpline>
-using DriftingPulse = Simulation<1, Kernel, eos::Pressureless, DriftRegularizer>;
+template <class Order = regularize::FirstOrder>
+using DriftRegularizer = regularize::LatticeRegularizer<lattice::Uniform1D, schedule::EveryT, geometry::LocalVoronoi,
+                                                        region::Unbounded, Order>;
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
+using DriftingPulse = Simulation<1, Kernel, eos::Pressureless, DriftRegularizer<Order>>;
 
-template <class Kernel = kernel::CubicSpline>
-DriftingPulse<Kernel> make_drifting_pulse(const DriftingPulseParams& s) {
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
+DriftingPulse<Kernel, Order> make_drifting_pulse(const DriftingPulseParams& s, Order order = {}) {
   s.validate();
   const double dx = s.spacing();
   ParticleSet<1, false> p;
@@ -48,9 +53,10 @@ DriftingPulse<Kernel> make_drifting_pulse(const DriftingPulseParams& s) {
   box.edge = {Edge::periodic};
   TimeStepParams ts;
   ts.dt_max = s.T_reg();  // force-free: one step per regularization
-  return DriftingPulse<Kernel>(
-      std::move(p), box, eos::Pressureless{},
-      DriftRegularizer(lattice::Uniform1D{dx}, schedule::EveryT{s.T_reg()}, regularize::RemapParams{s.h_over_dx}), ts);
+  return DriftingPulse<Kernel, Order>(std::move(p), box, eos::Pressureless{},
+                                      DriftRegularizer<Order>(lattice::Uniform1D{dx}, schedule::EveryT{s.T_reg()},
+                                                              regularize::RemapParams{s.h_over_dx}, {}, {}, order),
+                                      ts);
 }
 
 /// Positions in the frame moving with the drift, wrapped so the pulse sits where it started.

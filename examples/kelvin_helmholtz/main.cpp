@@ -34,6 +34,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("cells", s.cells, "1 / Delta");
   flag("h-over-dx", s.h_over_dx, "h / Delta (SPH: eta)");
   flag("reg-steps", s.reg_steps, "RSPH: steps between regularizations");
+  ex::add_remap_flag(flag, s.remap);
   flag("t-end", s.t_end, "end time (0: tau_KH = 0.58)");
   flag("courant", s.courant, "Courant factor");
   flag("density-ratio", s.chi, "density ratio chi of the upper to the lower gas");

@@ -27,6 +27,7 @@ struct KelvinHelmholtzParams {
   double t_end = 0.0;  ///< 0: tau_KH
   double courant = 0.3;
   int wavelengths = 6;  ///< box width in wavelengths 2 pi / k of the seeded mode (6: the paper's -0.5 < x < 0.5)
+  std::string remap = "first";  ///< RSPH: the remap's order, first (eqs. 6-9) or second
 
   /// Lattice columns across the box: the box is columns() * Delta wide.
   int columns() const { return static_cast<int>(std::lround(cells * wavelengths * 2.0 * std::numbers::pi / k)); }
@@ -43,6 +44,7 @@ struct KelvinHelmholtzParams {
     require(reg_steps >= 1, "Kelvin-Helmholtz: regularize at least every step");
     require(alpha_u >= 0.0, "Kelvin-Helmholtz: alpha_u must be non-negative");
     require(A >= 0.0, "Kelvin-Helmholtz: the seed amplitude must be non-negative");
+    examples::check_remap(remap);
   }
   /// 2 pi over the incompressible growth rate k dv sqrt(chi) / (1 + chi): 0.58 for the paper's setup.
   double tau_KH() const { return 2.0 * std::numbers::pi / (k * dv * std::sqrt(chi) / (1.0 + chi)); }
@@ -190,9 +192,11 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
 /// The scene's methods: RSPH on the square lattice, regularized every reg_steps, and grad-h SPH with equal
 /// masses; each with Price's conductivity or without.
 using KhKernel = kernel::CubicSpline;
-using KhRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps>;
-template <class... Terms>
-using RsphKh = Simulation<2, KhKernel, eos::IdealGas, KhRegularizer, Terms...>;
+template <class Order = regularize::FirstOrder>
+using KhRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps, geometry::LocalVoronoi,
+                                                     region::Unbounded, Order>;
+template <class Order, class... Terms>
+using RsphKh = Simulation<2, KhKernel, eos::IdealGas, KhRegularizer<Order>, Terms...>;
 template <class... Terms>
 using SphKh = Simulation<2, KhKernel, eos::IdealGas, regularize::None, physics::GradH<2>, Terms...>;
 
@@ -202,12 +206,13 @@ inline TimeStepParams kh_time_steps(const KelvinHelmholtzParams& s) {
   return ts;
 }
 
-template <class... Terms>
-RsphKh<Terms...> make_rsph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
-  return RsphKh<Terms...>(kh_lattice(s, s.h_over_dx), s.box(), eos::IdealGas{s.gamma},
-                          KhRegularizer(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
-                                        regularize::RemapParams{s.h_over_dx}),
-                          kh_time_steps(s), terms...);
+template <class Order, class... Terms>
+RsphKh<Order, Terms...> make_rsph_kh(const KelvinHelmholtzParams& s, Order order, Terms... terms) {
+  return RsphKh<Order, Terms...>(
+      kh_lattice(s, s.h_over_dx), s.box(), eos::IdealGas{s.gamma},
+      KhRegularizer<Order>(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
+                           regularize::RemapParams{s.h_over_dx}, {}, {}, order),
+      kh_time_steps(s), terms...);
 }
 
 template <class... Terms>
@@ -216,12 +221,15 @@ SphKh<Terms...> make_sph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
                          physics::GradH<2>{s.h_over_dx}, terms...);
 }
 
-/// Runs one of the four variants: RSPH or SPH, with conductivity when alpha_u > 0.
+/// Runs one of the variants: RSPH (with either remap) or SPH, with conductivity when alpha_u > 0.
 template <class OnStep, class OnEnd>
 KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end) {
   auto run = [&](auto sim) { return run_kh(sim, s, on_step, on_end); };
   const physics::ArtificialConductivity conduct{s.alpha_u};
-  if (rsph) return s.alpha_u > 0 ? run(make_rsph_kh(s, conduct)) : run(make_rsph_kh(s));
+  if (rsph)
+    return examples::with_remap(s.remap, [&](auto order) {
+      return s.alpha_u > 0 ? run(make_rsph_kh(s, order, conduct)) : run(make_rsph_kh(s, order));
+    });
   return s.alpha_u > 0 ? run(make_sph_kh(s, conduct)) : run(make_sph_kh(s));
 }
 

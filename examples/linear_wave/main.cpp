@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
     ex::add_common_options(flag, common, "--periods 20 --wavelength 12");
     flag("wavelength", s.wavelength_cells, "lambda / Delta (even)");
     flag("r", s.r, "RSPH: regularization period over wave period (0: plain SPH)");
+    ex::add_remap_flag(flag, s.remap);
     flag("alpha", s.alpha, "plain SPH (r = 0): artificial viscosity alpha; beta = 2 alpha");
     flag("h-over-dx", s.h_over_dx, "h / Delta");
     flag("periods", s.periods, "wave periods to run (N of eq. 11)");
@@ -60,6 +61,7 @@ int main(int argc, char** argv) {
     csv.close();
     io::Json summary;
     summary.set("test", "linear_wave").set("method", s.r > 0 ? "rsph" : "sph").set("kernel", kernel_name);
+    if (s.r > 0) summary.set("remap", s.remap);
     summary.set("wavelength_cells", s.wavelength_cells).set("r", s.r).set("alpha", s.alpha).set("beta", 2 * s.alpha);
     summary.set("h_over_dx", s.h_over_dx).set("periods", s.periods).set("jitter", s.jitter);
     summary.set("particles", 2 * s.wavelength_cells * (s.wavelength_cells / 2));

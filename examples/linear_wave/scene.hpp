@@ -20,11 +20,13 @@ struct LinearWaveParams {
   double cs = 1.0;  ///< isothermal sound speed; lambda = 1, so P_w = 1 / cs
   int periods = 100;
   double courant = 0.3;
-  double jitter = 0.0;  ///< random displacement in units of Delta, to seed instabilities
-  double r = 4.25;      ///< RSPH: T_reg / P_w (0: plain SPH; the default is Fig. 3's longest cycle)
-  double alpha = 0.0;   ///< plain SPH: artificial viscosity alpha, beta = 2 alpha
+  double jitter = 0.0;          ///< random displacement in units of Delta, to seed instabilities
+  double r = 4.25;              ///< RSPH: T_reg / P_w (0: plain SPH; the default is Fig. 3's longest cycle)
+  std::string remap = "first";  ///< RSPH: the remap's order, first (eqs. 6-9) or second
+  double alpha = 0.0;           ///< plain SPH: artificial viscosity alpha, beta = 2 alpha
 
   void validate() const {
+    examples::check_remap(remap);
     require(wavelength_cells >= 4 && wavelength_cells % 2 == 0,
             "linear wave: lambda/Delta must be an even number >= 4");
     require(h_over_dx > 0.0, "linear wave: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
@@ -96,9 +98,11 @@ double transverse_noise(const Sim& sim) {
 }  // namespace detail
 
 /// The scene's methods: RSPH regularized every r wave periods, and plain SPH with artificial viscosity.
-using WaveRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::EveryT>;
-template <class Kernel>
-using RsphWave = Simulation<2, Kernel, eos::Isothermal, WaveRegularizer>;
+template <class Order = regularize::FirstOrder>
+using WaveRegularizer =
+    regularize::LatticeRegularizer<lattice::Square, schedule::EveryT, geometry::LocalVoronoi, region::Unbounded, Order>;
+template <class Kernel, class Order = regularize::FirstOrder>
+using RsphWave = Simulation<2, Kernel, eos::Isothermal, WaveRegularizer<Order>>;
 template <class Kernel>
 using SphWave = Simulation<2, Kernel, eos::Isothermal, regularize::None, physics::ArtificialViscosity>;
 
@@ -108,12 +112,13 @@ inline TimeStepParams wave_time_steps(const LinearWaveParams& s) {
   return ts;
 }
 
-template <class Kernel>
-RsphWave<Kernel> make_rsph_wave(const LinearWaveParams& s) {
-  return RsphWave<Kernel>(linear_wave_particles(s), s.box(), eos::Isothermal{s.cs},
-                          WaveRegularizer(lattice::Square{s.spacing()}, schedule::EveryT{s.r * s.period()},
-                                          regularize::RemapParams{s.h_over_dx}),
-                          wave_time_steps(s));
+template <class Kernel, class Order = regularize::FirstOrder>
+RsphWave<Kernel, Order> make_rsph_wave(const LinearWaveParams& s, Order order = {}) {
+  return RsphWave<Kernel, Order>(
+      linear_wave_particles(s), s.box(), eos::Isothermal{s.cs},
+      WaveRegularizer<Order>(lattice::Square{s.spacing()}, schedule::EveryT{s.r * s.period()},
+                             regularize::RemapParams{s.h_over_dx}, {}, {}, order),
+      wave_time_steps(s));
 }
 
 template <class Kernel>
@@ -166,10 +171,11 @@ LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step,
 /// Runs RSPH when r > 0, else plain SPH.
 template <class Kernel, class OnStep, class AtStop = examples::NoHook>
 LinearWaveResult run_linear_wave(const LinearWaveParams& s, OnStep&& on_step, AtStop&& at_stop = {}) {
-  if (s.r > 0.0) {
-    auto sim = make_rsph_wave<Kernel>(s);
-    return run_wave<Kernel>(sim, s, on_step, at_stop);
-  }
+  if (s.r > 0.0)
+    return examples::with_remap(s.remap, [&](auto order) {
+      auto sim = make_rsph_wave<Kernel>(s, order);
+      return run_wave<Kernel>(sim, s, on_step, at_stop);
+    });
   auto sim = make_sph_wave<Kernel>(s);
   return run_wave<Kernel>(sim, s, on_step, at_stop);
 }

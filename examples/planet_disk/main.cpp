@@ -86,6 +86,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   ex::Flags flag(desc, common);
   ex::add_common_options(flag, common, "--particles 8000 --orbits 10 --snapshot-every 5");
   flag("method", s.method, "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity");
+  ex::add_remap_flag(flag, s.remap);
   flag("eos", s.eos, "isothermal (c_s / v_K fixed) or polytropic (eq. 21)");
   flag("q", s.q, "M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune");
   flag("resolution", resolution, "low (48 000 particles), med (108 000) or high (191 000)");
@@ -175,6 +176,7 @@ int run(Options opt) {
   }
   io::Json summary;
   summary.set("test", "planet_disk").set("method", s.method).set("eos", s.eos).set("q", s.q);
+  if (s.rsph()) summary.set("remap", s.remap);
   summary.set("max_bin", s.rsph() ? s.max_bin : 0);
   summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
   summary.set("lattice", s.lattice);

@@ -26,6 +26,7 @@ struct PlanetDiskParams {
   double particles = 48000;        ///< target particle count over the disk (LOW 48 000, MED 108 000, HIGH 191 000)
   double h_over_dx = 1.4;          ///< RSPH: h / Delta; SPH: eta of h = eta (m / rho)^(1/2)
   std::string lattice = "square";  ///< the lattice of the start and of RSPH's regularization: square or hexagonal
+  std::string remap = "first";     ///< RSPH: the remap's order, first (eqs. 6-9) or second
   double orbits = 100.0;           ///< planet orbits to run
   double r_in = 0.4, r_out = 2.5;  ///< the disk
   double zone_width = 0.1;         ///< width of the boundary zones on fixed orbits
@@ -49,6 +50,7 @@ struct PlanetDiskParams {
     require(eos == "isothermal" || eos == "polytropic",
             "planet disk: unknown equation of state '" + eos + "' (isothermal, polytropic)");
     require(method == "rsph" || method == "sph", "planet disk: unknown method '" + method + "' (rsph, sph)");
+    examples::check_remap(remap);
     require(lattice == "square" || lattice == "hexagonal",
             "planet disk: unknown lattice '" + lattice + "' (square, hexagonal)");
     require(particles >= 100.0, "planet disk: need at least 100 particles (got " + std::to_string(particles) + ")");
@@ -227,11 +229,12 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
 /// The scene's methods: RSPH with Appendix A's schedule and the annulus closing the edge cells, and
 /// equal-mass grad-h SPH with artificial viscosity; both with the star and planet and the boundary zones.
 using DiskKernel = kernel::CubicSpline;
-template <class Lattice>
-using DiskRegularizer =
-    regularize::LatticeRegularizer<Lattice, schedule::Adaptive<DiskKernel, 2>, geometry::LocalVoronoi, region::Annulus>;
-template <class Lattice, class EOS>
-using RsphDisk = Simulation<2, DiskKernel, EOS, DiskRegularizer<Lattice>, paper::StarAndPlanet, paper::KeplerianZones>;
+template <class Lattice, class Order = regularize::FirstOrder>
+using DiskRegularizer = regularize::LatticeRegularizer<Lattice, schedule::Adaptive<DiskKernel, 2>,
+                                                       geometry::LocalVoronoi, region::Annulus, Order>;
+template <class Lattice, class EOS, class Order = regularize::FirstOrder>
+using RsphDisk =
+    Simulation<2, DiskKernel, EOS, DiskRegularizer<Lattice, Order>, paper::StarAndPlanet, paper::KeplerianZones>;
 template <class EOS>
 using SphDisk = Simulation<2, DiskKernel, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity,
                            paper::StarAndPlanet, paper::KeplerianZones>;
@@ -244,16 +247,16 @@ inline TimeStepParams disk_time_steps(const PlanetDiskParams& s) {
   return ts;
 }
 
-template <class Lattice, class EOS>
-RsphDisk<Lattice, EOS> make_rsph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos) {
+template <class Lattice, class EOS, class Order = regularize::FirstOrder>
+RsphDisk<Lattice, EOS, Order> make_rsph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Order order = {}) {
   // Edge cells are closed at 0.75 Delta along the edge and by the disk's circles across it, and a new
   // cell less than half covered hands its share on: the edges stay where the disk ends.
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-  DiskRegularizer<Lattice> reg(
+  DiskRegularizer<Lattice, Order> reg(
       lat, schedule::Adaptive<DiskKernel, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)},
-      remap, {}, region::Annulus{s.r_in, s.r_out});
-  return RsphDisk<Lattice, EOS>(disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg), disk_time_steps(s),
-                                s.star_planet(), s.zones());
+      remap, {}, region::Annulus{s.r_in, s.r_out}, order);
+  return RsphDisk<Lattice, EOS, Order>(disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg),
+                                       disk_time_steps(s), s.star_planet(), s.zones());
 }
 
 template <class Lattice, class EOS>
@@ -267,10 +270,11 @@ namespace detail {
 
 template <class Lattice, class EOS, class Run>
 auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& run) {
-  if (s.rsph()) {
-    auto sim = make_rsph_disk(s, lat, std::move(eos));
-    return run(sim);
-  }
+  if (s.rsph())
+    return examples::with_remap(s.remap, [&](auto order) {
+      auto sim = make_rsph_disk(s, lat, eos, order);
+      return run(sim);
+    });
   auto sim = make_sph_disk(s, lat, std::move(eos));
   return run(sim);
 }

@@ -37,6 +37,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("ny", s.ny, "RSPH: lattice rows across the strip");
   flag("h-over-dx", s.h_over_dx, "RSPH: h / Delta");
   flag("max-steps", s.max_steps, "RSPH: most steps between regularizations");
+  ex::add_remap_flag(flag, s.remap);
   flag("sph-left", s.sph_nx_left, "SPH: particles along x, left half");
   flag("sph-left-rows", s.sph_ny_left, "SPH: rows, left half");
   flag("sph-right", s.sph_nx_right, "SPH: particles along x, right half");
@@ -87,7 +88,8 @@ int run(Options opt) {
   if (method == "rsph" && s.refinement.levels > 0)
     r = scenes::run_shock(scenes::make_rsph_levels_shock(s), s, on_step, on_end);
   else if (method == "rsph")
-    r = scenes::run_shock(scenes::make_rsph_shock(s), s, on_step, on_end);
+    r = ex::with_remap(
+        s.remap, [&](auto order) { return scenes::run_shock(scenes::make_rsph_shock(s, order), s, on_step, on_end); });
   else  // sph (parse_options refused the rest)
     r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end);
   progress.finish();

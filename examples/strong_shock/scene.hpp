@@ -25,6 +25,7 @@ struct StrongShockParams {
   double h_over_dx = 2.0;
   double N_min = 9.5, N_max = 308.0, dN_max = 0.4;
   std::uint64_t max_steps = 128;
+  std::string remap = "first";  ///< RSPH: the remap's order, first (eqs. 6-9) or second (one level only)
   // RSPH on levels 0..levels (0: the uniform lattice above); nx and ny count cells of the finest level
   examples::DensityJumpLevels refinement;
   // plain SPH: the paper's counts, 800 x 32 left and 100 x 4 right, h = eta (m / rho)^(1/2)
@@ -42,6 +43,9 @@ struct StrongShockParams {
     require(t_end > 0.0, "strong shock: t_end must be positive");
     require(gamma > 1.0, "strong shock: gamma must exceed 1");
     refinement.validate("strong shock", 6);
+    examples::check_remap(remap);
+    require(remap == "first" || refinement.levels == 0,
+            "strong shock: the second-order remap runs on one level (--levels 0)");
     const auto fine_per_block = refinement.fine_cells_per_block();
     require(refinement.levels == 0 || (nx % fine_per_block == 0 && ny % fine_per_block == 0),
             "strong shock: nx and ny must be multiples of 2^levels * block_cells = " + std::to_string(fine_per_block));
@@ -128,12 +132,17 @@ void measure(const Sim& sim, const StrongShockParams& s, ShockRun& r) {
 
 }  // namespace detail
 
-using ShockRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<kernel::CubicSpline, 2>>;
-using RsphShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, ShockRegularizer, physics::ArtificialViscosity>;
+template <class Order = regularize::FirstOrder>
+using ShockRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<kernel::CubicSpline, 2>,
+                                                        geometry::LocalVoronoi, region::Unbounded, Order>;
+template <class Order = regularize::FirstOrder>
+using RsphShock =
+    Simulation<2, kernel::CubicSpline, eos::IdealGas, ShockRegularizer<Order>, physics::ArtificialViscosity>;
 using SphShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity,
                             physics::GradH<2>>;
 
-inline RsphShock make_rsph_shock(const StrongShockParams& s) {
+template <class Order = regularize::FirstOrder>
+RsphShock<Order> make_rsph_shock(const StrongShockParams& s, Order order = {}) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   const double dx = 1.0 / s.nx;
@@ -146,11 +155,12 @@ inline RsphShock make_rsph_shock(const StrongShockParams& s) {
   box.edge = {Edge::reflecting, Edge::periodic};
   TimeStepParams ts;
   ts.courant = s.courant;
-  return RsphShock(std::move(p), box, gas,
-                   ShockRegularizer(lattice::Square{dx},
-                                    schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
-                                    regularize::RemapParams{s.h_over_dx}),
-                   ts, physics::ArtificialViscosity{s.alpha, s.beta});
+  return RsphShock<Order>(
+      std::move(p), box, gas,
+      ShockRegularizer<Order>(lattice::Square{dx},
+                              schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
+                              regularize::RemapParams{s.h_over_dx}, {}, {}, order),
+      ts, physics::ArtificialViscosity{s.alpha, s.beta});
 }
 
 /// RSPH on levels in factors of two (the paper's variable, time-dependent resolution), the density-jump

@@ -36,6 +36,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("h", s.h, "smoothing length (R_0)");
   flag("h-over-dx", s.h_over_dx, "h / Delta");
   flag("cycle", s.cycle, "regularization cycle c_r in units of --cycle-unit steps (0: never regularize)");
+  ex::add_remap_flag(flag, s.remap);
   flag("cycle-unit", s.cycle_unit, "steps per unit of c_r");
   flag("viscosity", s.viscosity,
        "mg: Monaghan-Gingold with alpha from nu_s (the paper); ns: Navier-Stokes stress tensor");
@@ -112,6 +113,7 @@ int run(Options opt) {
   summary.set("test", "viscous_ring").set("viscosity", s.viscosity).set("nu_s", s.nu).set("h", s.h);
   summary.set("h_over_dx", s.h_over_dx).set("cycle", s.cycle).set("cycle_unit", s.cycle_unit);
   summary.set("max_bin", s.max_bin).set("lattice", s.lattice);
+  if (s.cycle > 0) summary.set("remap", s.remap);
   summary.set("nu_eff", r.nu_eff).set("nu_eff_over_nu_s", r.nu_eff / s.nu);
   summary.set("nu_eff_min", r.nu_eff_min).set("nu_eff_max", r.nu_eff_max).set("noise_error", r.noise_error);
   summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final);

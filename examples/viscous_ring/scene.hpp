@@ -28,6 +28,7 @@ struct ViscousRingParams {
   double sigma_floor = 1e-4;       ///< the initial annulus: Sigma(tau*_0) above this fraction of its peak
   double inner_radius = 0.1;       ///< particles inside are accreted by the central mass (removed, counted)
   std::string viscosity = "mg";    ///< mg: Monaghan-Gingold with Meglicki's alpha; ns: Navier-Stokes stress
+  std::string remap = "first";     ///< RSPH: the remap's order, first (eqs. 6-9) or second
   std::string lattice = "square";  ///< the regularization lattice: square (the paper's) or hexagonal
   double bin_width = 0.01;         ///< radial bins of the azimuthal average (R_0)
   double force = 0.25;             ///< time-step force factor
@@ -39,6 +40,7 @@ struct ViscousRingParams {
     require(h > 0.0 && h < 0.2, "viscous ring: h must lie in (0, 0.2) R_0 (got " + std::to_string(h) + ")");
     require(h_over_dx > 0.0, "viscous ring: h/dx must be positive (got " + std::to_string(h_over_dx) + ")");
     require(cycle >= 0 && cycle_unit >= 1, "viscous ring: the regularization cycle must be >= 0 (0: off)");
+    examples::check_remap(remap);
     require(!taus.empty() && std::is_sorted(taus.begin(), taus.end()) && taus.front() > tau0,
             "viscous ring: snapshot times tau* must increase and follow tau*_0 = " + std::to_string(tau0));
     require(sigma_floor > 0.0 && sigma_floor < 1.0, "viscous ring: the initial floor must lie in (0, 1)");
@@ -217,11 +219,12 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
 /// The scene's methods: RSPH regularized every c_r cycles on a square or hexagonal lattice, and plain SPH
 /// (c_r = 0), each with Monaghan-Gingold or Navier-Stokes viscosity, about a point-mass star.
 using RingKernel = kernel::CubicSpline;
-template <class Lattice>
-using RingRegularizer = regularize::LatticeRegularizer<Lattice, schedule::EveryNSteps>;
-template <class Lattice, class Viscosity>
+template <class Lattice, class Order = regularize::FirstOrder>
+using RingRegularizer =
+    regularize::LatticeRegularizer<Lattice, schedule::EveryNSteps, geometry::LocalVoronoi, region::Unbounded, Order>;
+template <class Lattice, class Viscosity, class Order = regularize::FirstOrder>
 using RsphRing =
-    Simulation<2, RingKernel, eos::Pressureless, RingRegularizer<Lattice>, Viscosity, physics::PointMass<2>>;
+    Simulation<2, RingKernel, eos::Pressureless, RingRegularizer<Lattice, Order>, Viscosity, physics::PointMass<2>>;
 template <class Viscosity>
 using SphRing = Simulation<2, RingKernel, eos::Pressureless, regularize::None, Viscosity, physics::PointMass<2>>;
 
@@ -245,16 +248,17 @@ Viscosity ring_viscosity(const ViscousRingParams& s) {
     return Viscosity::on_square_lattice(s.nu, s.h_over_dx);
 }
 
-template <class Viscosity, class Lattice>
-RsphRing<Lattice, Viscosity> make_rsph_ring(const ViscousRingParams& s, const Lattice& lat) {
+template <class Viscosity, class Lattice, class Order = regularize::FirstOrder>
+RsphRing<Lattice, Viscosity, Order> make_rsph_ring(const ViscousRingParams& s, const Lattice& lat, Order order = {}) {
   // Open edges: an edge cell closed at 0.75 Delta has about one lattice cell's area, and a new cell
   // less than half covered hands its share to its neighbour, so the edge follows the gas rather
   // than creeping outwards by a closing radius at every regularization; cells with less than 1e-6 of
   // the largest mass join their neighbours, so the far tails (Sigma ~ 1e-6 of its peak) cost nothing.
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-  return RsphRing<Lattice, Viscosity>(
+  return RsphRing<Lattice, Viscosity, Order>(
       ring_particles_on(s, lat), s.box(), {},
-      RingRegularizer<Lattice>(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit}, remap),
+      RingRegularizer<Lattice, Order>(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit}, remap, {}, {},
+                                      order),
       ring_time_steps<Viscosity>(s), ring_viscosity<Viscosity, Lattice>(s),
       physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
 }
@@ -272,8 +276,10 @@ RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnSt
   using MG = physics::ShearViscosityMG<RingKernel, 2>;
   using NS = physics::NavierStokesViscosity<2>;
   auto run = [&](auto sim) { return run_ring(sim, s, on_step, on_snapshot); };
-  if (s.viscosity == "ns") return s.cycle > 0 ? run(make_rsph_ring<NS>(s, lat)) : run(make_sph_ring<NS>(s, lat));
-  return s.cycle > 0 ? run(make_rsph_ring<MG>(s, lat)) : run(make_sph_ring<MG>(s, lat));
+  if (s.cycle == 0) return s.viscosity == "ns" ? run(make_sph_ring<NS>(s, lat)) : run(make_sph_ring<MG>(s, lat));
+  return examples::with_remap(s.remap, [&](auto order) {
+    return s.viscosity == "ns" ? run(make_rsph_ring<NS>(s, lat, order)) : run(make_rsph_ring<MG>(s, lat, order));
+  });
 }
 }  // namespace detail
 

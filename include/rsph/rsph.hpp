@@ -54,5 +54,6 @@
 #include "rsph/regularize/refinement.hpp"
 #include "rsph/regularize/region.hpp"
 #include "rsph/regularize/remap.hpp"
+#include "rsph/regularize/remap_order.hpp"
 #include "rsph/regularize/schedule.hpp"
 #include "rsph/simulation.hpp"

@@ -23,6 +23,21 @@ ParticleSet<2, E> jittered_gas(int n, double jitter, unsigned seed, double shear
   return p;
 }
 
+/// An n x n lattice in the unit square whose upper half is offset by s Delta in x (periodic), each particle
+/// of mass Delta^2, u = 1, h = 1.2 Delta and velocity (vx(y), 0): two half-planes sliding past each other.
+template <class Vx>
+ParticleSet<2, true> offset_halves(int n, double s, Vx&& vx) {
+  ParticleSet<2, true> p;
+  const double dx = 1.0 / n;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      Vec<2> x((i + 0.5 + (j >= n / 2 ? s : 0.0)) * dx, (j + 0.5) * dx);
+      x[0] = std::fmod(x[0], 1.0);
+      p.add(dx * dx, x, Vec<2>(vx(x[1]), 0.0), 1.2 * dx, 1.0);
+    }
+  return p;
+}
+
 inline Box<2> box_with(Edge ex, Edge ey) {
   Box<2> b;
   b.edge = {ex, ey};

@@ -6,6 +6,7 @@
 #include "rsph/regularize/lattice.hpp"
 #include "rsph/regularize/multilevel.hpp"
 #include "rsph/regularize/remap.hpp"
+#include "rsph/regularize/remap_order.hpp"
 #include "rsph/regularize/schedule.hpp"
 
 #include <chrono>
@@ -22,26 +23,38 @@ struct Record {
   double seconds = 0.0;
 };
 
-template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi, class Region = region::Unbounded>
+template <class Lattice>
+constexpr bool is_multi_level = requires(const Lattice& l) {
+  l.finest();
+};
+
+template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi, class Region = region::Unbounded,
+          class Order = FirstOrder>
 class LatticeRegularizer {
   static_assert(check_lattice<Lattice>());
   static_assert(geometry::check_cell_builder<Builder>());
   static_assert(check_closing_region<Region>());
+  static_assert(check_remap_order<Order>());
+  static_assert(Order::order == 1 || !is_multi_level<Lattice>,
+                "the second-order remap runs on one-level lattices (Uniform1D, Square, Hexagonal): a multi-level "
+                "lattice takes regularize::FirstOrder");
 
  public:
   /// The driver hands the schedule n_a of eq. (A1) from its density pass (StepInfo::number_density).
   static constexpr bool wants_number_density = requires { requires Schedule::wants_number_density; };
 
   explicit LatticeRegularizer(Lattice lattice, Schedule schedule, RemapParams params = {}, Builder builder = {},
-                              Region region = {})
+                              Region region = {}, Order order = {})
       : lattice_(std::move(lattice)),
         schedule_(std::move(schedule)),
         params_(params),
         builder_(std::move(builder)),
-        region_(std::move(region)) {}
+        region_(std::move(region)),
+        order_(order) {}
 
   void validate() const {
     params_.validate();
+    if constexpr (requires { order_.validate(); }) order_.validate();
     if constexpr (requires { region_.validate(); }) region_.validate();
     require(lattice_.spacing > 0.0, "regularization: the lattice spacing Delta must be positive");
     if constexpr (requires { schedule_.validate(); }) schedule_.validate();
@@ -63,7 +76,10 @@ class LatticeRegularizer {
     Record r;
     r.step = s.step;
     r.time = s.time;
-    r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_, region_, &workspace_);
+    if constexpr (Order::order == 2)
+      r.stats = remap_second_order(p, box, lattice_, builder_, params_, order_.params, region_, &workspace_, &second_);
+    else
+      r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_, region_, &workspace_);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     log_.push_back(r);
     return r.stats.kinetic_converted;
@@ -73,6 +89,8 @@ class LatticeRegularizer {
   const Lattice& lattice() const { return lattice_; }
   Schedule& schedule() { return schedule_; }
   const RemapParams& params() const { return params_; }
+  /// "first" or "second": the remap's order, for the records a run writes.
+  static constexpr const char* remap_order() { return Order::name; }
 
  private:
   Lattice lattice_;
@@ -80,7 +98,11 @@ class LatticeRegularizer {
   RemapParams params_;
   Builder builder_;
   Region region_;
+  Order order_;
   RemapWorkspace<Lattice::dim> workspace_;
+  struct NoWorkspace {};
+  [[no_unique_address]] std::conditional_t<Order::order == 2, second_order::Workspace<Lattice::dim>, NoWorkspace>
+      second_;
   std::vector<Record> log_;
 };
 

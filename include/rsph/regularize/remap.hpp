@@ -55,6 +55,12 @@ struct RemapStats {
   /// Multi-level lattices: blocks whose criterion asked for more than the finest level, and the level asked.
   std::size_t capped_blocks = 0;
   int requested_level = 0;
+  /// Second-order remap: old cells handed out at first order because a new particle they feed would have
+  /// fallen below the thermal floor, and the passes over the overlaps that took (1 when none fell).
+  std::size_t first_order_cells = 0;
+  int passes = 1;
+  /// Second-order remap: old cells whose gradient the limiter cut (phi < 1 for rho, a velocity component or e).
+  std::size_t limited_cells = 0;
 };
 
 namespace detail {
@@ -91,6 +97,14 @@ struct alignas(64) Sums {          // one per thread: aligned so that no two thr
       E[n] += dm * specific_energy;  // eq. (9) plus kinetic energy, so total energy is conserved
       fill[n] += omega;
     }
+  }
+  /// Adds a share (mass, momentum, total energy, covered volume) to cell n: the second-order remap's shares
+  /// are integrals of each old cell's reconstruction over the overlaps.
+  void add_share(std::size_t n, double dm, const Vec<D>& dmv, double dE, double omega) {
+    m[n] += dm;
+    mv[n] += dmv;
+    E[n] += dE;
+    fill[n] += omega;
   }
   /// Adds o's sums of the cells [begin, end); the mismatch is merged by the caller.
   void merge(const Sums& o, std::size_t begin, std::size_t end) {
@@ -297,6 +311,59 @@ void for_each_old_interval(const ParticleSet<1, E>& p, const Box<1>& box, const 
   }
 }
 
+/// Axis k's part of the flat index of 2D lattice index i in `grid`: wrapped on periodic axes, clamped at
+/// walls (a round-off sliver beyond a wall); -1 outside the grid.
+inline std::int64_t axis_part(const CellGrid<2>& grid, const Box<2>& box, int k, std::int64_t i) {
+  const auto kk = static_cast<std::size_t>(k);
+  if (grid.periods[kk] > 0) i = wrap_index(i, grid.periods[kk]);
+  i -= grid.range.lo[kk];
+  if (box.edge[k] == Edge::reflecting) i = std::clamp<std::int64_t>(i, 0, grid.count[kk] - 1);
+  if (i < 0 || i >= grid.count[kk]) return -1;
+  return k == 0 ? i : i * grid.count[0];
+}
+/// Whether lattice index idx lies beyond a wall (outside the grid along a reflecting axis).
+inline bool beyond_wall(const CellGrid<2>& grid, const Box<2>& box, std::array<std::int64_t, 2> idx) {
+  for (int k = 0; k < 2; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    if (box.edge[k] == Edge::reflecting &&
+        (idx[kk] < grid.range.lo[kk] || idx[kk] >= grid.range.lo[kk] + grid.count[kk]))
+      return true;
+  }
+  return false;
+}
+
+/// Cells that are not rectangles do not tile a box with walls: `part`, an old cell's overlap with the
+/// lattice cell idx beyond a wall (relative to xo), goes to the nearest sites inside among idx's
+/// neighbours, each taking the piece nearer to it than to the others, just as the old cells, clipped to
+/// the box, are the Voronoi cells of the sites inside. A lattice set then maps onto itself at walls too.
+/// Calls f(index inside, piece) for each; a box one row wide (no site inside next to it) gives the whole
+/// part to idx, whose flat index is clamped.
+template <class Lattice, class F>
+void share_beyond_wall(const Lattice& lattice, const CellGrid<2>& grid, const Box<2>& box,
+                       std::array<std::int64_t, 2> idx, const geometry::ConvexPolygon& part, const Vec<2>& xo, F&& f) {
+  std::array<std::array<std::int64_t, 2>, 8> nbs;
+  std::array<Vec<2>, 8> at;
+  std::size_t n = 0;
+  for (std::int64_t dj = -1; dj <= 1; ++dj)
+    for (std::int64_t di = -1; di <= 1; ++di) {
+      const std::array<std::int64_t, 2> nb{idx[0] + di, idx[1] + dj};
+      if ((di == 0 && dj == 0) || beyond_wall(grid, box, nb)) continue;
+      nbs[n] = nb;
+      at[n++] = lattice.site(box, nb) - xo;
+    }
+  if (n == 0) {
+    f(idx, part);
+    return;
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    geometry::ConvexPolygon piece = part;
+    for (std::size_t m = 0; m < n && piece.n >= 3; ++m)
+      if (m != k)  // nearer to at[k] than to at[m]
+        geometry::clip_halfplane(piece, at[m] - at[k], 0.5 * (at[m].squaredNorm() - at[k].squaredNorm()));
+    f(nbs[k], piece);
+  }
+}
+
 /// What the overlaps need of a lattice's cells beyond their sites: nothing for rectangles (the grid lines),
 /// the sides of the cell shape for the others.
 struct NoSides {};
@@ -337,54 +404,17 @@ struct OldCellVisitor {
   std::vector<Scratch> scratch;
   [[no_unique_address]] CellSides<Lattice> sides;
 
-  /// Axis k's part of the flat index of lattice index i: wrapped on periodic axes, clamped at walls (a
-  /// round-off sliver beyond a wall); -1 outside the grid.
-  std::int64_t axis_part(int k, std::int64_t i) const {
-    const auto kk = static_cast<std::size_t>(k);
-    if (grid->periods[kk] > 0) i = wrap_index(i, grid->periods[kk]);
-    i -= grid->range.lo[kk];
-    if (box->edge[k] == Edge::reflecting) i = std::clamp<std::int64_t>(i, 0, grid->count[kk] - 1);
-    if (i < 0 || i >= grid->count[kk]) return -1;
-    return k == 0 ? i : i * grid->count[0];
-  }
-  /// Whether lattice index idx lies beyond a wall (outside the grid along a reflecting axis).
-  bool beyond_wall(std::array<std::int64_t, 2> idx) const {
-    for (int k = 0; k < 2; ++k) {
-      const auto kk = static_cast<std::size_t>(k);
-      if (box->edge[k] == Edge::reflecting &&
-          (idx[kk] < grid->range.lo[kk] || idx[kk] >= grid->range.lo[kk] + grid->count[kk]))
-        return true;
-    }
-    return false;
-  }
-  /// Cells that are not rectangles do not tile a box with walls: `part`, an old cell's overlap with the
-  /// lattice cell idx beyond a wall (relative to xo), goes to the nearest sites inside among idx's
-  /// neighbours, each taking the piece nearer to it than to the others, just as the old cells, clipped to
-  /// the box, are the Voronoi cells of the sites inside. A lattice set then maps onto itself at walls too.
-  /// Fills `shares` with (index inside, area); returns how many.
+  std::int64_t axis_part(int k, std::int64_t i) const { return detail::axis_part(*grid, *box, k, i); }
+  bool beyond_wall(std::array<std::int64_t, 2> idx) const { return detail::beyond_wall(*grid, *box, idx); }
+  /// share_beyond_wall's pieces as (index inside, area); returns how many.
   using Share = std::pair<std::array<std::int64_t, 2>, double>;
   std::size_t share_beyond_wall(std::array<std::int64_t, 2> idx, const geometry::ConvexPolygon& part, const Vec<2>& xo,
                                 std::array<Share, 8>& shares) const {
-    std::array<Vec<2>, 8> at;
     std::size_t n = 0;
-    for (std::int64_t dj = -1; dj <= 1; ++dj)
-      for (std::int64_t di = -1; di <= 1; ++di) {
-        const std::array<std::int64_t, 2> nb{idx[0] + di, idx[1] + dj};
-        if ((di == 0 && dj == 0) || beyond_wall(nb)) continue;
-        shares[n].first = nb;
-        at[n++] = lattice->site(*box, nb) - xo;
-      }
-    if (n == 0) {  // no site inside next to it (a box one row wide): the clamped cell takes it all
-      shares[0] = {idx, geometry::area(part)};
-      return 1;
-    }
-    for (std::size_t k = 0; k < n; ++k) {
-      geometry::ConvexPolygon piece = part;
-      for (std::size_t m = 0; m < n && piece.n >= 3; ++m)
-        if (m != k)  // nearer to at[k] than to at[m]
-          geometry::clip_halfplane(piece, at[m] - at[k], 0.5 * (at[m].squaredNorm() - at[k].squaredNorm()));
-      shares[k].second = geometry::area(piece);
-    }
+    detail::share_beyond_wall(*lattice, *grid, *box, idx, part, xo,
+                              [&](std::array<std::int64_t, 2> nb, const geometry::ConvexPolygon& piece) {
+                                shares[n++] = {nb, geometry::area(piece)};
+                              });
     return n;
   }
   void restart() { action->restart(); }
@@ -541,6 +571,17 @@ void for_each_old_cell(const ParticleSet<2, E>& p, const Box<2>& box, const Latt
   builder.build(p.x, box, workspace.closing, visitor, only);
 }
 
+/// The radius of the disc that closes each old cell at open edges (none when no axis is open).
+template <bool E>
+void set_closing_radii(const ParticleSet<2, E>& p, const Box<2>& box, const RemapParams& params,
+                       std::vector<double>& closing) {
+  closing.clear();
+  if (box.edge[0] == Edge::open || box.edge[1] == Edge::open) {
+    closing.resize(p.n_real);
+    for (std::size_t a = 0; a < p.n_real; ++a) closing[a] = params.closing_radius_in_h * p.h[a];
+  }
+}
+
 /// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
 /// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
 /// The sums land in workspace.sums[0]. With `record_reach` (2D), workspace.reach receives each old cell's
@@ -568,12 +609,7 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
                           });
   } else {
     static_assert(D == 2, "the remap supports 1D and 2D");
-    auto& closing = workspace.closing;
-    closing.clear();
-    if (box.edge[0] == Edge::open || box.edge[1] == Edge::open) {
-      closing.resize(n_old);
-      for (std::size_t a = 0; a < n_old; ++a) closing[a] = params.closing_radius_in_h * p.h[a];
-    }
+    set_closing_radii(p, box, params, workspace.closing);
     struct AddToSums {
       std::vector<detail::Sums<2>>* sums;
       const ParticleSet<D, E>* p;
@@ -735,6 +771,29 @@ void for_each_grid_neighbour(const CellGrid<D>& grid, std::size_t c, F&& f) {
   }
 }
 
+/// The end of a remap onto one lattice: the shares of nearly empty cells handed on, and one new particle per
+/// kept cell of `grid`, in lattice order, with h = h_over_dx * Delta.
+template <class Lattice, int D, bool E>
+void emit_on_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
+                     const CellGrid<D>& grid, Sums<D>& S, RemapWorkspace<D>& ws, RemapStats& stats) {
+  const double cell_volume = lattice.cell_volume();
+  auto& keep = ws.keep;
+  hand_on_sparse_cells<D>(
+      S, params, [&](std::size_t) { return cell_volume; },
+      [&](std::size_t c, auto&& f) { for_each_grid_neighbour(grid, c, f); }, stats.dropped_cells, keep);
+  auto& order = ws.order;
+  order.resize(grid.n_cells);
+  std::iota(order.begin(), order.end(), std::size_t{0});
+  const double h_new = params.h_over_dx * lattice.spacing;
+  emit_particles(
+      p, S, keep, order,
+      [&](std::size_t c) {
+        return std::pair{lattice.site(box, grid.unflat(c)), h_new};
+      },
+      stats);
+  stats.per_level = {stats.n_after};
+}
+
 template <class Lattice, int D, bool E>
 void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const RemapParams& params) {
   static_assert(Lattice::dim == D, "the lattice's dimension differs from the particles'");
@@ -776,22 +835,7 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
-  const double cell_volume = lattice.cell_volume();
-  auto& keep = ws.keep;
-  detail::hand_on_sparse_cells<D>(
-      S, params, [&](std::size_t) { return cell_volume; },
-      [&](std::size_t c, auto&& f) { detail::for_each_grid_neighbour(grid, c, f); }, stats.dropped_cells, keep);
-  auto& order = ws.order;
-  order.resize(grid.n_cells);
-  std::iota(order.begin(), order.end(), std::size_t{0});
-  const double h_new = params.h_over_dx * lattice.spacing;
-  detail::emit_particles(
-      p, S, keep, order,
-      [&](std::size_t c) {
-        return std::pair{lattice.site(box, grid.unflat(c)), h_new};
-      },
-      stats);
-  stats.per_level = {stats.n_after};
+  detail::emit_on_lattice(p, box, lattice, params, grid, S, ws, stats);
   return stats;
 }
 

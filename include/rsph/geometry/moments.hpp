@@ -1,0 +1,72 @@
+#pragma once
+// Area, first and second moments of convex polygons by Green's theorem, and the cut of a polygon by an
+// axis-parallel line into its two sides: what a remap that carries gradients needs of every overlap.
+#include "rsph/geometry/polygon.hpp"
+
+namespace rsph::geometry {
+
+/// The integrals of 1, x, y, x^2, x y, y^2 over a region (coordinates of the polygon's own frame).
+struct Moments {
+  double area = 0.0;
+  Point first = Point::Zero();  ///< (int x dA, int y dA)
+  double xx = 0.0, xy = 0.0, yy = 0.0;
+
+  Moments& operator+=(const Moments& o) {
+    area += o.area;
+    first += o.first;
+    xx += o.xx;
+    xy += o.xy;
+    yy += o.yy;
+    return *this;
+  }
+  Point centroid() const { return first / area; }
+};
+
+/// Green's theorem over the edges (counter-clockwise): with c_i = x_i y_{i+1} - x_{i+1} y_i,
+/// A = sum c/2, int x = sum (x_i + x_{i+1}) c/6, int x^2 = sum (x_i^2 + x_i x_{i+1} + x_{i+1}^2) c/12,
+/// int x y = sum (2 x_i y_i + x_i y_{i+1} + x_{i+1} y_i + 2 x_{i+1} y_{i+1}) c/24.
+inline Moments moments(const ConvexPolygon& p) {
+  Moments m;
+  if (p.n < 3) return m;
+  double a = 0.0, mx = 0.0, my = 0.0, xx = 0.0, xy = 0.0, yy = 0.0;
+  for (int i = 0, j = p.n - 1; i < p.n; j = i++) {
+    const double x0 = p[j].x(), y0 = p[j].y(), x1 = p[i].x(), y1 = p[i].y();
+    const double c = x0 * y1 - x1 * y0;
+    a += c;
+    mx += (x0 + x1) * c;
+    my += (y0 + y1) * c;
+    xx += (x0 * x0 + x0 * x1 + x1 * x1) * c;
+    yy += (y0 * y0 + y0 * y1 + y1 * y1) * c;
+    xy += (2.0 * x0 * y0 + x0 * y1 + x1 * y0 + 2.0 * x1 * y1) * c;
+  }
+  m.area = 0.5 * a;
+  m.first = Point(mx / 6.0, my / 6.0);
+  m.xx = xx / 12.0;
+  m.xy = xy / 24.0;
+  m.yy = yy / 12.0;
+  return m;
+}
+
+/// Cuts `in` by the line x_axis = c into the part below (x_axis <= c) and the part above; either may come
+/// out empty. The new vertices on the line are set to c exactly, so neighbouring pieces share them.
+inline void split_at(const ConvexPolygon& in, int axis, double c, ConvexPolygon& below, ConvexPolygon& above) {
+  below.clear();
+  above.clear();
+  for (int i = 0, j = in.n - 1; i < in.n; j = i++) {
+    const double si = in[i][axis] - c, sj = in[j][axis] - c;
+    if ((si > 0.0) != (sj > 0.0)) {
+      Point x = in[j] + (sj / (sj - si)) * (in[i] - in[j]);
+      x[axis] = c;
+      below.push(x);
+      above.push(x);
+    }
+    if (si <= 0.0)
+      below.push(in[i]);
+    else
+      above.push(in[i]);
+  }
+  if (below.n < 3) below.clear();
+  if (above.n < 3) above.clear();
+}
+
+}  // namespace rsph::geometry

@@ -1,0 +1,490 @@
+#pragma once
+// The second-order remap: eqs. (6)-(9) with each old cell's density, velocity and specific total energy
+// reconstructed linearly instead of taken constant. Every overlap receives the integral of the reconstruction
+// over it, by its area and its first and second moments, so that mass, momentum and total energy stay
+// conserved old cell by old cell, and a field linear in space is carried over exactly.
+//
+//   rho(x) = rho_o + g_rho . (x - x_c)        about the cell's centroid x_c: the cell keeps its mass
+//   v(x)   = v_o + G_v (x - x_m)              about the cell's mass centroid x_m = x_c + I g_rho / m_o
+//   e(x)   = e_o + g_e . (x - x_m)            (I: the cell's central second moments): it keeps its
+//                                             momentum and total energy
+// For a piece P with moments A, M1 = int x, M2 = int x x^T:
+//   m_P = rho_o A + g_rho . (M1 - A x_c),   W_P = int_P rho (x - x_m) = rho_o (M1 - A x_m) + S^T g_rho,
+//   S = int_P (x - x_c)(x - x_m)^T,         (m v)_P = m_P v_o + G_v W_P,   E_P = m_P e_o + g_e . W_P,
+// and the W_P of a cell sum to zero. Gradients come from least squares over the Voronoi neighbours, limited
+// (Barth-Jespersen) so that no vertex of the cell leaves the range of the cell and its neighbours.
+#include "rsph/regularize/remap.hpp"
+#include "rsph/regularize/second_order/cells.hpp"
+#include "rsph/regularize/second_order/reconstruction.hpp"
+
+#include <array>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace rsph::regularize {
+
+/// The second-order remap's parameters.
+struct SecondOrderParams {
+  /// A new particle whose thermal energy u = E/m - v^2/2 comes out below this fraction of the least u of the
+  /// old cells that feed it is refilled with those cells handed out at first order (which cannot fall
+  /// below it: first-order u is at least the feeders' mass-weighted mean).
+  double thermal_floor = 0.5;
+  /// Barth-Jespersen limiting of every gradient; off only to study the unlimited reconstruction.
+  bool limit = true;
+
+  void validate() const {
+    require(thermal_floor >= 0.0 && thermal_floor < 1.0,
+            "second-order remap: the thermal floor must lie in [0, 1) (got " + std::to_string(thermal_floor) + ")");
+  }
+};
+
+namespace second_order {
+
+/// One old cell's unlimited reconstruction, points relative to its particle, and the ranges of its fields
+/// over the cell and its neighbours.
+template <int D>
+struct Reconstruction {
+  Vec<D> g_rho = Vec<D>::Zero();  ///< about the centroid
+  Vec<D> x_m = Vec<D>::Zero();    ///< mass centroid of the unlimited density, the velocity fit's reference
+  Mat<D> G_v = Mat<D>::Zero();    ///< row k: the gradient of v_k, about the mass centroid
+  Vec<D> g_e = Vec<D>::Zero();    ///< specific total energy, about the mass centroid
+  FieldRanges<D> range;           ///< over the cell and its neighbours
+  std::uint8_t limited = 0;       ///< set by the last hand-out if the limiter cut any gradient
+};
+
+/// What the shares of one old cell are computed from.
+template <int D>
+struct OldCell {
+  double m = 0.0, e = 0.0;  ///< mass and specific total energy
+  Vec<D> v = Vec<D>::Zero();
+  Reconstruction<D>* r = nullptr;
+};
+
+/// The pieces of the old cells one thread listed, in the order of its cells.
+template <int D>
+struct Pieces {
+  std::vector<std::size_t> flat;
+  std::vector<PieceMoments<D>> moments;
+  void clear() {
+    flat.clear();
+    moments.clear();
+  }
+};
+
+/// The limiter's scratch for one old cell's pieces.
+template <int D>
+struct HandOutScratch {
+  std::vector<Vec<D>> offsets, W;
+  std::vector<double> m;
+};
+
+/// Scratch kept from one second-order remap to the next.
+template <int D>
+struct Workspace {
+  CellStore<D> cells;
+  CellsByThread by_thread;
+  neighbors::CellList<D> lookup;
+  std::vector<Reconstruction<D>> recon;
+  std::vector<std::uint8_t> first_order, bad;
+  std::vector<std::vector<double>> u_min;  ///< per thread: the least u of the old cells feeding each new cell
+  /// per thread, then reduced into the first: each new cell's bounds, the union of the ranges of the old
+  /// cells that overlap it (each over the cell and its neighbours)
+  std::vector<std::vector<FieldRanges<D>>> bounds;
+  struct alignas(64) PerThread {
+    Pieces<D> pieces;
+    HandOutScratch<D> scratch;
+  };
+  std::vector<PerThread> threads;
+  /// Where each old cell's pieces are: the thread that listed them, the first and how many.
+  std::vector<std::uint32_t> piece_thread, piece_first, piece_count;
+};
+
+template <int D>
+double specific_total_energy(double u, const Vec<D>& v) {
+  return u + 0.5 * v.squaredNorm();
+}
+
+/// Density gradients about the centroids, the density's range over each cell and its neighbours, and the
+/// mass centroids the gradients give.
+template <int D, bool E>
+void reconstruct_density(const ParticleSet<D, E>& p, const CellStore<D>& s, std::vector<Reconstruction<D>>& recon) {
+  run_parallel(p.n_real, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t a = begin; a < end; ++a) {
+      Reconstruction<D>& r = recon[a];
+      r = Reconstruction<D>{};
+      r.x_m = s.centroid[a];
+      const double rho = p.m[a] / s.volume[a];
+      r.range.rho.add(rho);
+      LeastSquares<D, 1> fit;
+      for (const auto& f : s.faces_of(a)) {
+        if (f.b == CellStore<D>::no_neighbour) continue;
+        const double rho_b = p.m[f.b] / s.volume[f.b];
+        r.range.rho.add(rho_b);
+        fit.add(Vec<D>(f.d + s.centroid[f.b] - s.centroid[a]), f.length, Eigen::Matrix<double, 1, 1>(rho_b - rho));
+      }
+      Eigen::Matrix<double, D, 1> g;
+      if (p.m[a] <= 0.0 || !fit.solve(g)) continue;
+      r.g_rho = g;
+      r.x_m = s.centroid[a] + s.inertia[a] * r.g_rho / p.m[a];
+    }
+  });
+}
+
+/// Velocity and specific total energy gradients about the mass centroids, and their ranges.
+template <int D, bool E>
+void reconstruct_motion(const ParticleSet<D, E>& p, const CellStore<D>& s, std::vector<Reconstruction<D>>& recon) {
+  using Fields = Eigen::Matrix<double, D + 1, 1>;  // v, then e
+  auto fields = [&](std::size_t b) {
+    Fields q;
+    q.template head<D>() = p.v[b];
+    if constexpr (E)
+      q[D] = specific_total_energy<D>(p.u[b], p.v[b]);
+    else
+      q[D] = 0.0;
+    return q;
+  };
+  run_parallel(p.n_real, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t a = begin; a < end; ++a) {
+      Reconstruction<D>& r = recon[a];
+      const Fields qa = fields(a);
+      auto extend = [&](const Fields& q) {
+        for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) r.range.v[k].add(q[static_cast<int>(k)]);
+        r.range.e.add(q[D]);
+      };
+      extend(qa);
+      LeastSquares<D, D + 1> fit;
+      for (const auto& f : s.faces_of(a)) {
+        if (f.b == CellStore<D>::no_neighbour) continue;
+        const Fields qb = fields(f.b);
+        extend(qb);
+        fit.add(Vec<D>(f.d + recon[f.b].x_m - r.x_m), f.length, Fields(qb - qa));
+      }
+      Eigen::Matrix<double, D, D + 1> g;
+      if (p.m[a] <= 0.0 || !fit.solve(g)) continue;
+      r.G_v = g.template leftCols<D>().transpose();
+      if constexpr (E) r.g_e = g.col(D);
+    }
+  });
+}
+
+/// Hands old cell o out over its pieces. The cell's volume, centroid and moments are taken from the pieces
+/// themselves, so its mass and the W_P sum to it exactly whatever round-off crumbs were dropped. With
+/// `bounds` (one per new cell), each gradient is scaled (Barth-Jespersen) so that no piece's mean density,
+/// velocity or energy leaves the bounds of the new cell it lands in: the range of the old cells that overlap
+/// that cell and of their neighbours.
+template <int D>
+void hand_out(const OldCell<D>& o, std::span<const std::size_t> flat, std::span<const PieceMoments<D>> moments,
+              double exact_volume, const FieldRanges<D>* bounds, HandOutScratch<D>& pc, detail::Sums<D>& sums) {
+  PieceMoments<D> whole;
+  for (const auto& pm : moments) whole += pm;
+  if (!(whole.area > 0.0)) throw NumericalError("regularization: an old cell overlaps no new cell");
+  sums.max_mismatch = std::max(sums.max_mismatch, std::abs(whole.area - exact_volume) / exact_volume);
+  Reconstruction<D>& r = *o.r;
+  const std::size_t n = moments.size();
+  const double rho = o.m / whole.area;
+  const Vec<D> x_c = whole.first / whole.area;
+  const Mat<D> inertia = whole.second - whole.area * x_c * x_c.transpose();
+  pc.offsets.resize(n);
+  pc.W.resize(n);
+  pc.m.resize(n);
+  auto bound = [&](auto field) {
+    return std::pair{[&, field](std::size_t k) { return field(bounds[flat[k]]).lo; },
+                     [&, field](std::size_t k) { return field(bounds[flat[k]]).hi; }};
+  };
+  double phi = 1.0;
+  Vec<D> g_rho = r.g_rho;
+  if (bounds) {  // the pieces' mean densities are rho at their centroids
+    for (std::size_t k = 0; k < n; ++k) pc.offsets[k] = moments[k].first / moments[k].area - x_c;
+    const auto [lo, hi] = bound([](const FieldRanges<D>& b) { return b.rho; });
+    g_rho *= phi = barth_jespersen<D>(rho, g_rho, pc.offsets, lo, hi);
+  }
+  const Vec<D> x_m = o.m > 0.0 ? Vec<D>(x_c + inertia * g_rho / o.m) : x_c;
+  for (std::size_t k = 0; k < n; ++k) {
+    const PieceMoments<D>& pm = moments[k];
+    pc.m[k] = rho * pm.area + g_rho.dot(pm.first - pm.area * x_c);
+    const Mat<D> S =
+        pm.second - pm.first * x_m.transpose() - x_c * pm.first.transpose() + pm.area * x_c * x_m.transpose();
+    pc.W[k] = rho * (pm.first - pm.area * x_m) + S.transpose() * g_rho;
+  }
+  Mat<D> G_v = r.G_v;
+  Vec<D> g_e = r.g_e;
+  if (bounds) {  // the pieces' mean velocities and energies are the fields at their mass centroids
+    for (std::size_t k = 0; k < n; ++k) pc.offsets[k] = pc.m[k] > 0.0 ? Vec<D>(pc.W[k] / pc.m[k]) : Vec<D>::Zero();
+    for (std::size_t i = 0; i < static_cast<std::size_t>(D); ++i) {
+      const auto [lo, hi] = bound([i](const FieldRanges<D>& b) { return b.v[i]; });
+      const double phi_i =
+          barth_jespersen<D>(o.v[static_cast<int>(i)], G_v.row(static_cast<int>(i)).transpose(), pc.offsets, lo, hi);
+      G_v.row(static_cast<int>(i)) *= phi_i;
+      phi = std::min(phi, phi_i);
+    }
+    const auto [lo, hi] = bound([](const FieldRanges<D>& b) { return b.e; });
+    const double phi_e = barth_jespersen<D>(o.e, g_e, pc.offsets, lo, hi);
+    g_e *= phi_e;
+    phi = std::min(phi, phi_e);
+  }
+  r.limited = phi < 1.0;
+  for (std::size_t k = 0; k < n; ++k)
+    sums.add_share(flat[k], pc.m[k], pc.m[k] * o.v + G_v * pc.W[k], pc.m[k] * o.e + g_e.dot(pc.W[k]), moments[k].area);
+}
+
+/// Calls f(flat index, moments) for every piece of the 2D old cell `cell` (relative to its particle at xo)
+/// on the lattice cells of `grid`. Rectangular cells: the cell is cut column by column, each column row by
+/// row; other shapes: clipped by each candidate cell, and a part beyond a wall shared out as in the
+/// first-order remap. Round-off crumbs below 1e-13 of the cell are dropped, as there.
+template <class Lattice, class F>
+void for_each_piece(const Lattice& lattice, const Box<2>& box, const detail::CellGrid<2>& grid, std::size_t a,
+                    const geometry::ConvexPolygon& cell, const Vec<2>& xo, F&& f) {
+  geometry::Bounds b;
+  const double crumb = 1e-13 * geometry::area_and_bounds(cell, b);
+  const auto r = lattice.cells_touching(box, Vec<2>(b.lo + xo), Vec<2>(b.hi + xo));
+  auto emit = [&](std::array<std::int64_t, 2> idx, const geometry::ConvexPolygon& piece) {
+    if (piece.n < 3) return;
+    const auto m = geometry::moments(piece);
+    if (!(m.area > crumb)) return;
+    const std::int64_t col = detail::axis_part(grid, box, 0, idx[0]), row = detail::axis_part(grid, box, 1, idx[1]);
+    if ((col | row) < 0)
+      throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
+                           std::to_string(a) + ")");
+    f(static_cast<std::size_t>(col + row), piece_moments(m));
+  };
+  if constexpr (Lattice::rectangular_cells) {
+    // ping-pong buffers: the rest of the cell right of the column lines, the column, the rest of the column
+    // above the row lines, the piece; nothing is copied
+    std::array<geometry::ConvexPolygon, 6> buf;
+    const geometry::ConvexPolygon* rest = &cell;
+    for (std::int64_t i = r.lo[0], rb = 0; i <= r.hi[0] && rest->n >= 3; ++i) {
+      const geometry::ConvexPolygon* column = rest;
+      if (i < r.hi[0]) {
+        geometry::split_at(*rest, 0, lattice.line(box, 0, i + 1, xo[0]), buf[2], buf[static_cast<std::size_t>(rb)]);
+        column = &buf[2];
+        rest = &buf[static_cast<std::size_t>(rb)];
+        rb ^= 1;
+      }
+      const geometry::ConvexPolygon* row_rest = column;
+      for (std::int64_t j = r.lo[1], cb = 4; j <= r.hi[1] && row_rest->n >= 3; ++j) {
+        const geometry::ConvexPolygon* piece = row_rest;
+        if (j < r.hi[1]) {
+          geometry::split_at(*row_rest, 1, lattice.line(box, 1, j + 1, xo[1]), buf[3],
+                             buf[static_cast<std::size_t>(cb)]);
+          piece = &buf[3];
+          row_rest = &buf[static_cast<std::size_t>(cb)];
+          cb ^= 1;
+        }
+        emit({i, j}, *piece);
+      }
+    }
+  } else {
+    for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
+      for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
+        const geometry::ConvexPolygon part = geometry::clip_convex(cell, lattice.cell(box, {i, j}, xo));
+        if (part.n < 3) continue;
+        if (detail::beyond_wall(grid, box, {i, j}))
+          detail::share_beyond_wall(lattice, grid, box, {i, j}, part, xo, emit);
+        else
+          emit({i, j}, part);
+      }
+  }
+}
+
+template <int D, bool E>
+OldCell<D> old_cell(const ParticleSet<D, E>& p, std::vector<Reconstruction<D>>& recon, std::size_t a) {
+  OldCell<D> o;
+  o.m = p.m[a];
+  o.v = p.v[a];
+  if constexpr (E) o.e = specific_total_energy<D>(p.u[a], p.v[a]);
+  o.r = &recon[a];
+  return o;
+}
+
+/// Lists every old cell's pieces (kept per thread for the hand-outs) and, with `limit`, each new cell's bounds:
+/// the union of the ranges of the old cells with a piece in it, into ws.bounds[0].
+template <class Lattice, int D, bool E>
+void list_pieces(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
+                 bool limit, const detail::CellGrid<D>& grid, Workspace<D>& ws) {
+  const auto n_threads = static_cast<std::size_t>(max_threads());
+  ws.threads.resize(n_threads);
+  ws.piece_thread.resize(p.n_real);
+  ws.piece_first.resize(p.n_real);
+  ws.piece_count.resize(p.n_real);
+  if (limit) {
+    ws.bounds.resize(n_threads);
+    run_parallel(n_threads, [&](int, std::size_t begin, std::size_t end) {
+      for (std::size_t t = begin; t < end; ++t) ws.bounds[t].assign(grid.n_cells, FieldRanges<D>{});
+    });
+  }
+  auto listed = [&](int t, std::size_t a, std::size_t first) {
+    const auto tt = static_cast<std::size_t>(t);
+    const auto& own = ws.threads[tt].pieces;
+    ws.piece_thread[a] = static_cast<std::uint32_t>(t);
+    ws.piece_first[a] = static_cast<std::uint32_t>(first);
+    ws.piece_count[a] = static_cast<std::uint32_t>(own.flat.size() - first);
+    if (limit)
+      for (std::size_t k = first; k < own.flat.size(); ++k) ws.bounds[tt][own.flat[k]].add(ws.recon[a].range);
+  };
+  for (auto& t : ws.threads) t.pieces.clear();
+  if constexpr (D == 1) {
+    auto& own = ws.threads[0].pieces;
+    detail::for_each_old_interval(p, box, lattice, params, grid,
+                                  [&](std::size_t a, double left, double, const auto& overlaps, double) {
+                                    const std::size_t first = own.flat.size();
+                                    double at = left - p.x[a][0];  // the overlaps come in order from the left end
+                                    for (const auto& [c, omega] : overlaps) {
+                                      own.flat.push_back(c);
+                                      own.moments.push_back(interval_moments(at, at + omega));
+                                      at += omega;
+                                    }
+                                    listed(0, a, first);
+                                  });
+  } else {
+    run_parallel(p.n_real, [&](int t, std::size_t begin, std::size_t end) {
+      auto& own = ws.threads[static_cast<std::size_t>(t)].pieces;
+      for (std::size_t a = begin; a < end; ++a) {
+        const std::size_t first = own.flat.size();
+        for_each_piece(lattice, box, grid, a, ws.cells.polygon(a), p.x[a],
+                       [&](std::size_t c, const PieceMoments<2>& pm) {
+                         own.flat.push_back(c);
+                         own.moments.push_back(pm);
+                       });
+        listed(t, a, first);
+      }
+    });
+  }
+  if (limit)
+    run_parallel(grid.n_cells, [&](int, std::size_t begin, std::size_t end) {
+      for (std::size_t t = 1; t < ws.bounds.size(); ++t)
+        for (std::size_t c = begin; c < end; ++c) ws.bounds[0][c].add(ws.bounds[t][c]);
+    });
+}
+
+/// One pass over the old cells' pieces: every piece's shares into the per-thread sums (reduced into
+/// sums[0]), and, with u, the least u of the cells feeding each new cell (into ws.u_min[0]).
+template <int D, bool E>
+void hand_out_all(const ParticleSet<D, E>& p, bool limit, std::size_t n_cells, Workspace<D>& ws,
+                  std::vector<detail::Sums<D>>& sums) {
+  detail::clear_sums(sums, n_cells);
+  const auto n_threads = static_cast<std::size_t>(max_threads());
+  if constexpr (E) {
+    ws.u_min.resize(n_threads);
+    for (auto& u : ws.u_min) u.assign(n_cells, std::numeric_limits<double>::max());
+  }
+  run_parallel(p.n_real, [&](int t, std::size_t begin, std::size_t end) {
+    const auto tt = static_cast<std::size_t>(t);
+    for (std::size_t a = begin; a < end; ++a) {
+      const auto& listed = ws.threads[ws.piece_thread[a]].pieces;
+      const std::span<const std::size_t> flat(listed.flat.data() + ws.piece_first[a], ws.piece_count[a]);
+      const std::span<const PieceMoments<D>> moments(listed.moments.data() + ws.piece_first[a], ws.piece_count[a]);
+      hand_out<D>(old_cell(p, ws.recon, a), flat, moments, ws.cells.volume[a],
+                  limit && !ws.first_order[a] ? ws.bounds[0].data() : nullptr, ws.threads[tt].scratch, sums[tt]);
+      if constexpr (E)
+        for (const std::size_t c : flat) ws.u_min[tt][c] = std::min(ws.u_min[tt][c], p.u[a]);
+    }
+  });
+  detail::reduce_sums(sums);
+  if constexpr (E)
+    run_parallel(n_cells, [&](int, std::size_t begin, std::size_t end) {
+      for (std::size_t t = 1; t < ws.u_min.size(); ++t)
+        for (std::size_t c = begin; c < end; ++c) ws.u_min[0][c] = std::min(ws.u_min[0][c], ws.u_min[t][c]);
+    });
+}
+
+/// Marks the new cells whose thermal energy falls below the floor; returns how many.
+template <int D>
+std::size_t mark_cold_cells(const detail::Sums<D>& S, const std::vector<double>& u_min, double floor,
+                            std::vector<std::uint8_t>& bad) {
+  bad.assign(S.m.size(), 0);
+  std::size_t n = 0;
+  for (std::size_t c = 0; c < S.m.size(); ++c) {
+    if (!(S.m[c] > 0.0)) continue;
+    const Vec<D> v = S.mv[c] / S.m[c];
+    const double u = S.E[c] / S.m[c] - 0.5 * v.squaredNorm();
+    bad[c] = u < floor * u_min[c];
+    n += bad[c];
+  }
+  return n;
+}
+
+/// Takes every old cell that may feed a marked new cell (its bounds, widened by a lattice cell) to first
+/// order; returns how many were newly taken.
+template <class Lattice, int D, bool E>
+std::size_t fall_back_to_first_order(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
+                                     const detail::CellGrid<D>& grid, Workspace<D>& ws) {
+  std::size_t taken = 0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    if (ws.first_order[a]) continue;
+    Vec<D> lo = Vec<D>::Constant(std::numeric_limits<double>::max()), hi = -lo;
+    for (const auto& v : ws.cells.vertices_of(a)) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+    auto r = lattice.cells_touching(box, Vec<D>(lo + p.x[a]), Vec<D>(hi + p.x[a]));
+    bool feeds = false;
+    std::array<std::int64_t, D> idx;
+    for (int k = 0; k < D; ++k) idx[k] = --r.lo[k];
+    for (int k = 0; k < D; ++k) ++r.hi[k];
+    for (;;) {
+      const std::int64_t f = grid.flat(idx);
+      feeds |= f >= 0 && ws.bad[static_cast<std::size_t>(f)];
+      int k = 0;
+      for (; k < D; ++k) {
+        if (++idx[k] <= r.hi[k]) break;
+        idx[k] = r.lo[k];
+      }
+      if (k == D) break;
+    }
+    if (!feeds) continue;
+    ws.first_order[a] = 1;
+    auto& rc = ws.recon[a];
+    rc.g_rho.setZero();
+    rc.G_v.setZero();
+    rc.g_e.setZero();
+    ++taken;
+  }
+  return taken;
+}
+
+}  // namespace second_order
+
+/// The second-order remap of `p` onto `lattice`: as remap_onto_lattice (the same new particles, the same
+/// hand-on of nearly empty cells), each old cell handing out its linear reconstruction instead of its
+/// mean. `ws2` (optional) keeps the cells and reconstructions' storage between remaps.
+template <class Lattice, class Builder, int D, bool E, class Region = region::Unbounded>
+RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
+                              const RemapParams& params, const SecondOrderParams& second, const Region& region = {},
+                              RemapWorkspace<D>* workspace = nullptr, second_order::Workspace<D>* ws2 = nullptr) {
+  static_assert(check_closing_region<Region>());
+  static_assert(D == 2 || !Region::clips, "closing regions are two-dimensional");
+  detail::check_remap_input(p, lattice, params);
+  second.validate();
+  RemapWorkspace<D> local;
+  second_order::Workspace<D> local2;
+  RemapWorkspace<D>& ws = workspace ? *workspace : local;
+  second_order::Workspace<D>& w2 = ws2 ? *ws2 : local2;
+  const auto grid = detail::candidate_grid(p, box, lattice, params);
+  if constexpr (D == 1)
+    second_order::collect_cells(p, box, lattice, params, grid, w2.cells);
+  else
+    second_order::collect_cells(p, box, builder, params, region, ws.closing, w2.by_thread, w2.lookup, w2.cells);
+  w2.recon.resize(p.n_real);
+  second_order::reconstruct_density(p, w2.cells, w2.recon);
+  second_order::reconstruct_motion(p, w2.cells, w2.recon);
+  second_order::list_pieces(p, box, lattice, params, second.limit, grid, w2);
+  RemapStats stats;
+  w2.first_order.assign(p.n_real, 0);
+  for (stats.passes = 1;; ++stats.passes) {
+    second_order::hand_out_all(p, second.limit, grid.n_cells, w2, ws.sums);
+    if constexpr (!E) break;
+    if (second_order::mark_cold_cells(ws.sums[0], w2.u_min[0], second.thermal_floor, w2.bad) == 0) break;
+    const std::size_t taken = second_order::fall_back_to_first_order(p, box, lattice, grid, w2);
+    stats.first_order_cells += taken;
+    if (taken == 0) break;  // every feeder is at first order already: nothing left to fall back on
+  }
+  for (const auto& r : w2.recon) stats.limited_cells += r.limited;
+  stats.max_volume_mismatch = ws.sums[0].max_mismatch;
+  detail::emit_on_lattice(p, box, lattice, params, grid, ws.sums[0], ws, stats);
+  return stats;
+}
+
+}  // namespace rsph::regularize
