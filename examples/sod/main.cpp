@@ -88,9 +88,13 @@ int run(const Options& opt, Sim sim) {
 template <int D, class Kernel>
 int run_method(const Options& opt) {
   if (opt.method == "sph") return run<D, Kernel>(opt, scenes::make_sod<D, Kernel>(opt.sod));
-  if (opt.method == "rsph" && opt.consistent_gradient)
-    return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel>(opt.sod, opt.rsph, opt.gradient));
-  if (opt.method == "rsph") return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel>(opt.sod, opt.rsph));
+  if (opt.method == "rsph")
+    return ex::with_remap(opt.rsph.remap, [&](auto order) {
+      using Order = decltype(order);
+      if (opt.consistent_gradient)
+        return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, opt.gradient));
+      return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph));
+    });
   throw InputError("unknown method '" + opt.method + "' (sph, rsph)");
 }
 
@@ -123,6 +127,7 @@ int main(int argc, char** argv) {
     flag("snapshots", opt.snapshots, "HDF5 snapshots after the initial one");
     flag("method", opt.method, "sph: equal masses, grad-h; rsph: lattice regularization, levels in factors of two");
     flag("cycle", opt.rsph.cycle, "rsph: steps between regularizations");
+    ex::add_remap_flag(flag, opt.rsph.remap);
     flag("consistent-gradient", opt.consistent_gradient,
          "rsph: continuity density and pair gradients corrected so that level faces keep uniform states exact");
     flag("gradient-tolerance", opt.gradient.tolerance, "rsph: relative residual of the consistent-gradient solve");

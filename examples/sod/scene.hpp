@@ -2,6 +2,7 @@
 // Sod's shock tube (Sod 1978): (rho, v, P) = (1, 0, 1) left of x = 0.5 and (0.125, 0, 0.1) right,
 // gamma = 1.4, in 1D or in 2D as a strip periodic in y; reflecting walls at x = 0 and x = 1.
 #include "common/levels.hpp"
+#include "common/run_helpers.hpp"
 #include "rsph/rsph.hpp"
 
 #include <cmath>
@@ -85,27 +86,30 @@ requires(D == 1 || D == 2) SodSimulation<D, Kernel> make_sod(const SodParams& s)
 struct RsphSodParams {
   examples::DensityJumpLevels refinement{.levels = 2};  ///< the level-0 spacing is 2^levels times the finest
   std::uint64_t cycle = 10;                             ///< regularize every `cycle` steps
-  int max_bin = 0;  ///< individual time steps down to 2^-max_bin of the longest (0: global)
+  int max_bin = 0;              ///< individual time steps down to 2^-max_bin of the longest (0: global)
+  std::string remap = "first";  ///< the remap's order, first (eqs. 6-9) or second
   void validate() const {
+    examples::check_remap(remap);
     refinement.validate("Sod RSPH", 8);
     require(cycle >= 1, "Sod RSPH: --cycle must be at least 1");
   }
 };
 
-template <int D, class Kernel>
+template <int D, class Order = regularize::FirstOrder>
 using RsphSodRegularizer =
-    regularize::LatticeRegularizer<lattice::MultiLevel<D, refine::DensityJump>, schedule::EveryNSteps>;
-template <int D, class Kernel, class... Extra>
+    regularize::LatticeRegularizer<lattice::MultiLevel<D, refine::DensityJump>, schedule::EveryNSteps,
+                                   geometry::LocalVoronoi, region::Unbounded, Order>;
+template <int D, class Kernel, class Order, class... Extra>
 using RsphSodSimulation =
-    Simulation<D, Kernel, eos::IdealGas, RsphSodRegularizer<D, Kernel>, physics::ArtificialViscosity, Extra...>;
+    Simulation<D, Kernel, eos::IdealGas, RsphSodRegularizer<D, Order>, physics::ArtificialViscosity, Extra...>;
 
 /// The tube on the finest lattice everywhere, then one remap onto the multi-level lattice, which puts
 /// the membrane on the finest level and the uniform states on level 0.
 /// `extra` terms join the artificial viscosity (physics::ConsistentGradient for exact level faces).
-template <int D, class Kernel, class... Extra>
-requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Extra...> make_rsph_sod(const SodParams& s,
-                                                                                const RsphSodParams& r,
-                                                                                Extra... extra) {
+template <int D, class Kernel, class Order = regularize::FirstOrder, class... Extra>
+requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Order, Extra...> make_rsph_sod(const SodParams& s,
+                                                                                       const RsphSodParams& r,
+                                                                                       Extra... extra) {
   s.validate();
   r.validate();
   const eos::IdealGas gas{s.gamma};
@@ -144,8 +148,9 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Extra...> make_rsph_sod(
   TimeStepParams ts;
   ts.courant = s.courant;
   ts.max_bin = r.max_bin;
-  return RsphSodSimulation<D, Kernel, Extra...>(
-      std::move(p), box, gas, RsphSodRegularizer<D, Kernel>(std::move(ml), schedule::EveryNSteps{r.cycle}, remap), ts,
+  return RsphSodSimulation<D, Kernel, Order, Extra...>(
+      std::move(p), box, gas,
+      RsphSodRegularizer<D, Order>(std::move(ml), schedule::EveryNSteps{r.cycle}, remap, {}, {}, Order{}), ts,
       physics::ArtificialViscosity{s.alpha, s.beta}, extra...);
 }
 

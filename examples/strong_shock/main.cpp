@@ -86,7 +86,9 @@ int run(Options opt) {
   };
   scenes::ShockRun r;
   if (method == "rsph" && s.refinement.levels > 0)
-    r = scenes::run_shock(scenes::make_rsph_levels_shock(s), s, on_step, on_end);
+    r = ex::with_remap(s.remap, [&](auto order) {
+      return scenes::run_shock(scenes::make_rsph_levels_shock(s, order), s, on_step, on_end);
+    });
   else if (method == "rsph")
     r = ex::with_remap(
         s.remap, [&](auto order) { return scenes::run_shock(scenes::make_rsph_shock(s, order), s, on_step, on_end); });

@@ -25,7 +25,7 @@ struct StrongShockParams {
   double h_over_dx = 2.0;
   double N_min = 9.5, N_max = 308.0, dN_max = 0.4;
   std::uint64_t max_steps = 128;
-  std::string remap = "first";  ///< RSPH: the remap's order, first (eqs. 6-9) or second (one level only)
+  std::string remap = "first";  ///< RSPH: the remap's order, first (eqs. 6-9) or second
   // RSPH on levels 0..levels (0: the uniform lattice above); nx and ny count cells of the finest level
   examples::DensityJumpLevels refinement;
   // plain SPH: the paper's counts, 800 x 32 left and 100 x 4 right, h = eta (m / rho)^(1/2)
@@ -44,8 +44,6 @@ struct StrongShockParams {
     require(gamma > 1.0, "strong shock: gamma must exceed 1");
     refinement.validate("strong shock", 6);
     examples::check_remap(remap);
-    require(remap == "first" || refinement.levels == 0,
-            "strong shock: the second-order remap runs on one level (--levels 0)");
     const auto fine_per_block = refinement.fine_cells_per_block();
     require(refinement.levels == 0 || (nx % fine_per_block == 0 && ny % fine_per_block == 0),
             "strong shock: nx and ny must be multiples of 2^levels * block_cells = " + std::to_string(fine_per_block));
@@ -166,13 +164,17 @@ RsphShock<Order> make_rsph_shock(const StrongShockParams& s, Order order = {}) {
 /// RSPH on levels in factors of two (the paper's variable, time-dependent resolution), the density-jump
 /// criterion choosing the levels at every regularization, with consistent gradients at the level faces.
 using ShockLevels = lattice::MultiLevel<2, refine::DensityJump>;
-using LevelShockRegularizer = regularize::LatticeRegularizer<ShockLevels, schedule::Adaptive<kernel::CubicSpline, 2>>;
-using RsphLevelShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, LevelShockRegularizer,
+template <class Order = regularize::FirstOrder>
+using LevelShockRegularizer = regularize::LatticeRegularizer<ShockLevels, schedule::Adaptive<kernel::CubicSpline, 2>,
+                                                             geometry::LocalVoronoi, region::Unbounded, Order>;
+template <class Order = regularize::FirstOrder>
+using RsphLevelShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, LevelShockRegularizer<Order>,
                                   physics::ArtificialViscosity, physics::ConsistentGradient>;
 
 /// The tube on the finest lattice, then one remap onto the level lattice: the membrane on the finest
 /// level, the uniform states on level 0; rho = m / V, as the continuity equation takes it.
-inline RsphLevelShock make_rsph_levels_shock(const StrongShockParams& s) {
+template <class Order = regularize::FirstOrder>
+RsphLevelShock<Order> make_rsph_levels_shock(const StrongShockParams& s, Order order = {}) {
   s.validate();
   require(s.refinement.levels > 0, "strong shock: the level lattice needs --levels >= 1");
   const eos::IdealGas gas{s.gamma};
@@ -187,10 +189,11 @@ inline RsphLevelShock make_rsph_levels_shock(const StrongShockParams& s) {
   auto ml = examples::start_on_levels(p, box, dx, s.refinement, remap);
   TimeStepParams ts;
   ts.courant = s.courant;
-  return RsphLevelShock(
+  return RsphLevelShock<Order>(
       std::move(p), box, gas,
-      LevelShockRegularizer(std::move(ml),
-                            schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps}, remap),
+      LevelShockRegularizer<Order>(std::move(ml),
+                                   schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
+                                   remap, {}, {}, order),
       ts, physics::ArtificialViscosity{s.alpha, s.beta}, physics::ConsistentGradient{});
 }
 

@@ -5,6 +5,7 @@
 #include <numbers>
 #include <random>
 
+#include "conservation_check.hpp"
 #include "particle_sets.hpp"
 
 using namespace rsph;
@@ -20,20 +21,21 @@ auto left_of(double x_split, int level) {
   return refine::region<2>([=](const Vec<2>& lo, const Vec<2>&) { return lo[0] < x_split; }, level);
 }
 
-template <int D, class Lattice>
+/// Remaps p onto `lattice` with the remap of order `Order` and checks that it conserves, and that every new
+/// particle is counted on a level.
+template <class Order = regularize::FirstOrder, int D, class Lattice>
 regularize::RemapStats conserving_remap(ParticleSet<D, true>& p, const Box<D>& box, Lattice& lattice,
                                         RemapParams params = {}) {
-  const auto before = conservation(p);
-  double scale = 0.0;
-  for (std::size_t a = 0; a < p.n_real; ++a) scale += p.m[a] * p.v[a].norm();
   geometry::LocalVoronoi builder;
-  const auto stats = remap_onto_lattice(p, box, lattice, builder, params);
-  const auto after = conservation(p);
-  CHECK(stats.max_volume_mismatch < 1e-12);
-  CHECK(std::abs(after.mass - before.mass) / before.mass < 1e-13);
-  CHECK((after.momentum - before.momentum).norm() <= 1e-13 * scale);
-  CHECK(std::abs(after.total_energy() - before.total_energy()) / before.total_energy() < 1e-13);
-  CHECK(stats.kinetic_converted >= -1e-15);
+  const auto stats = test::check_conserved(
+      p,
+      [&](ParticleSet<D, true>& q) {
+        if constexpr (Order::order == 2)
+          return regularize::remap_second_order(q, box, lattice, builder, params, {});
+        else
+          return remap_onto_lattice(q, box, lattice, builder, params);
+      },
+      Order::order == 1);
   std::size_t sum = 0;
   for (auto n : stats.per_level) sum += n;
   CHECK(sum == p.n_real);
@@ -81,13 +83,14 @@ TEST_CASE("multi-level remap: a level-0 lattice reproduces the uniform remap exa
   }
 }
 
-TEST_CASE("multi-level remap conserves mass, momentum and energy while levels change", "[regularize][multilevel]") {
+TEMPLATE_TEST_CASE("multi-level remap conserves mass, momentum and energy while levels change",
+                   "[regularize][multilevel]", regularize::FirstOrder, regularize::SecondOrder) {
   for (auto box : {box_with(Edge::periodic, Edge::periodic), box_with(Edge::reflecting, Edge::reflecting)}) {
     auto p = jittered_gas(48, 0.45, 2);
     using Crit = refine::Region<2, std::function<bool(const Vec<2>&, const Vec<2>&)>>;
     lattice::MultiLevel<2, Crit> ml{1.0 / 16, 2, 2,
                                     Crit{[](const Vec<2>& lo, const Vec<2>&) { return lo[0] < 0.25; }, 2}};
-    auto stats = conserving_remap(p, box, ml, RemapParams{1.4});
+    auto stats = conserving_remap<TestType>(p, box, ml, RemapParams{1.4});
     // blocks of 2 level-0 cells (1/8): x < 0.25 on level 2, the next block column on level 1 (2:1; with
     // periodic x also the last column), the rest on level 0
     const bool periodic = box.periodic(0);
@@ -103,24 +106,24 @@ TEST_CASE("multi-level remap conserves mass, momentum and energy while levels ch
     // move the refined region: levels go up on the right and down on the left, still exactly conservative
     ml.criterion.meets = [](const Vec<2>&, const Vec<2>& hi) { return hi[0] > 0.75; };
     for (auto& v : p.v) v += Vec<2>(0.3, -0.1);
-    stats = conserving_remap(p, box, ml, RemapParams{1.4});
+    stats = conserving_remap<TestType>(p, box, ml, RemapParams{1.4});
     CHECK(stats.per_level[2] == 2 * 8 * 64);
     CHECK(worst_level_step(ml, 8, 8, periodic) == 1);
   }
 }
 
-TEST_CASE("multi-level remap with an open edge: closed cells meet the face cells, still exactly conservative",
-          "[regularize][multilevel]") {
+TEMPLATE_TEST_CASE("multi-level remap with an open edge: closed cells meet the face cells, still exactly conservative",
+                   "[regularize][multilevel]", regularize::FirstOrder, regularize::SecondOrder) {
   auto p = jittered_gas(32, 0.4, 3);
   const auto box = box_with(Edge::open, Edge::reflecting);
   using Crit = refine::Region<2, std::function<bool(const Vec<2>&, const Vec<2>&)>>;
   lattice::MultiLevel<2, Crit> ml{1.0 / 16, 2, 1, Crit{[](const Vec<2>& lo, const Vec<2>&) { return lo[0] < 0.5; }, 1}};
-  auto stats = conserving_remap(p, box, ml, RemapParams{1.4});
+  auto stats = conserving_remap<TestType>(p, box, ml, RemapParams{1.4});
   CHECK(stats.per_level[1] > 0);
   CHECK(stats.per_level[0] > 0);
   for (auto& v : p.v) v += Vec<2>(0.2, 0.1);
   for (auto& x : p.x) x[0] += 0.013;  // off the lattice, so the second remap cuts every cell anew
-  stats = conserving_remap(p, box, ml, RemapParams{1.4});
+  stats = conserving_remap<TestType>(p, box, ml, RemapParams{1.4});
   CHECK(stats.per_level[1] > 0);
 }
 
@@ -198,7 +201,8 @@ TEST_CASE("density-jump criterion refines a front and its hysteresis band", "[re
   for (std::int64_t b = 0; b < 8; ++b) CHECK(ml.levels().at({b, 0}) == (b == 3 || b == 4 ? 1 : 0));
 }
 
-TEST_CASE("1D multi-level remap conserves and lays levels out in factors of two", "[regularize][multilevel]") {
+TEMPLATE_TEST_CASE("1D multi-level remap conserves and lays levels out in factors of two", "[regularize][multilevel]",
+                   regularize::FirstOrder, regularize::SecondOrder) {
   ParticleSet<1, true> p;
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(-0.3, 0.3);
@@ -208,7 +212,7 @@ TEST_CASE("1D multi-level remap conserves and lays levels out in factors of two"
   box.edge = {Edge::reflecting};
   auto middle = refine::region<1>([](const Vec<1>& lo, const Vec<1>& hi) { return lo[0] < 0.6 && hi[0] > 0.4; }, 2);
   lattice::MultiLevel<1, decltype(middle)> ml{1.0 / 50, 2, 5, middle};
-  const auto stats = conserving_remap(p, box, ml, RemapParams{2.0});
+  const auto stats = conserving_remap<TestType>(p, box, ml, RemapParams{2.0});
   // blocks of 0.1: [0.4, 0.6] on level 2 (spacing 1/200), one level-1 block either side
   CHECK(stats.per_level[2] == 40);
   CHECK(stats.per_level[1] == 20);

@@ -23,11 +23,6 @@ struct Record {
   double seconds = 0.0;
 };
 
-template <class Lattice>
-constexpr bool is_multi_level = requires(const Lattice& l) {
-  l.finest();
-};
-
 template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi, class Region = region::Unbounded,
           class Order = FirstOrder>
 class LatticeRegularizer {
@@ -35,9 +30,6 @@ class LatticeRegularizer {
   static_assert(geometry::check_cell_builder<Builder>());
   static_assert(check_closing_region<Region>());
   static_assert(check_remap_order<Order>());
-  static_assert(Order::order == 1 || !is_multi_level<Lattice>,
-                "the second-order remap runs on one-level lattices (Uniform1D, Square, Hexagonal): a multi-level "
-                "lattice takes regularize::FirstOrder");
 
  public:
   /// The driver hands the schedule n_a of eq. (A1) from its density pass (StepInfo::number_density).

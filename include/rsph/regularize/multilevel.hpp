@@ -426,11 +426,9 @@ void replace_face_sums(const Faces& faces, const std::vector<FaceSums<D>>& sums,
 /// their lattice squares (a union of finest cells); each old cell's share of F from the finest-cell pass
 /// is handed to the face cells in proportion to its exact overlaps with their Voronoi cells, so the remap
 /// stays exactly conservative. Replaces the face cells' sums in `cells` and their volumes in `volume`.
-template <class Builder, bool E, class Region>
-void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const lattice::Square& fine, Builder& builder,
-                      const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& ws, const Footprint<2>& fp,
-                      Sums<2>& cells, std::vector<double>& volume) {
-  const Faces faces = find_faces<2>(fp.size(), [&](std::size_t c) {
+/// The face cells of a footprint (2D): new cells whose one-cell ring holds a cell of another level.
+inline Faces level_faces(const CellGrid<2>& grid, const Footprint<2>& fp) {
+  return find_faces<2>(fp.size(), [&](std::size_t c) {
     const std::int64_t s = fp.span[c], i0 = fp.first_fine[c][0], j0 = fp.first_fine[c][1];
     for (std::int64_t i = -1; i <= s; ++i)
       for (std::int64_t j = -1; j <= s; ++j) {
@@ -440,6 +438,12 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
       }
     return false;
   });
+}
+
+template <class Builder, bool E, class Region>
+void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const lattice::Square& fine, Builder& builder,
+                      const CellGrid<2>& grid, const Region& region, RemapWorkspace<2>& ws, const Footprint<2>& fp,
+                      const Faces& faces, Sums<2>& cells, std::vector<double>& volume) {
   if (faces.cells.empty()) return;
   const std::size_t n_faces = faces.cells.size();
   FaceCells2 fc{std::vector<geometry::ConvexPolygon>(n_faces), std::vector<Vec<2>>(n_faces),
@@ -468,27 +472,33 @@ void remap_face_cells(const ParticleSet<2, E>& p, const Box<2>& box, const latti
 
 /// The 1D counterpart of the above: a face cell's new cell is the interval between the midpoints to its
 /// neighbouring sites.
-template <bool E>
-void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const lattice::Uniform1D& fine,
-                      const RemapParams& params, const CellGrid<1>& grid, const Footprint<1>& fp, Sums<1>& cells,
-                      std::vector<double>& volume) {
-  const double dx = fp.dx;
-  const double L = box.hi[0] - box.lo[0];
-  auto site = [&](std::size_t c) { return fp.site(c)[0]; };
-  // the owner of finest cell i (grid-relative) and the shift of its period; -1 beyond the grid
-  auto owner_at = [&](std::int64_t i, double& shift) -> std::int64_t {
-    const std::int64_t fl = grid.flat({grid.range.lo[0] + i});
-    if (fl < 0) return -1;
-    shift = static_cast<double>(grid.range.lo[0] + i - grid.unflat(static_cast<std::size_t>(fl))[0]) * dx;
-    return static_cast<std::int64_t>(fp.owner[static_cast<std::size_t>(fl)]);
-  };
-  const Faces faces = find_faces<1>(fp.size(), [&](std::size_t c) {
+/// The owner of finest cell i (grid-relative) in 1D and the shift of its period; -1 beyond the grid.
+inline std::int64_t owner_at(const CellGrid<1>& grid, const Footprint<1>& fp, std::int64_t i, double& shift) {
+  const std::int64_t fl = grid.flat({grid.range.lo[0] + i});
+  if (fl < 0) return -1;
+  shift = static_cast<double>(grid.range.lo[0] + i - grid.unflat(static_cast<std::size_t>(fl))[0]) * fp.dx;
+  return static_cast<std::int64_t>(fp.owner[static_cast<std::size_t>(fl)]);
+}
+
+/// The face cells of a footprint (1D): new cells beside a cell of another level.
+inline Faces level_faces(const CellGrid<1>& grid, const Footprint<1>& fp) {
+  return find_faces<1>(fp.size(), [&](std::size_t c) {
     double shift = 0.0;
-    const std::int64_t l = owner_at(fp.first_fine[c][0] - 1, shift),
-                       r = owner_at(fp.first_fine[c][0] + fp.span[c], shift);
+    const std::int64_t l = owner_at(grid, fp, fp.first_fine[c][0] - 1, shift),
+                       r = owner_at(grid, fp, fp.first_fine[c][0] + fp.span[c], shift);
     return (l >= 0 && fp.span[static_cast<std::size_t>(l)] != fp.span[c]) ||
            (r >= 0 && fp.span[static_cast<std::size_t>(r)] != fp.span[c]);
   });
+}
+
+template <bool E>
+void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const lattice::Uniform1D& fine,
+                      const RemapParams& params, const CellGrid<1>& grid, const Footprint<1>& fp, const Faces& faces,
+                      Sums<1>& cells, std::vector<double>& volume) {
+  const double dx = fp.dx;
+  const double L = box.hi[0] - box.lo[0];
+  auto site = [&](std::size_t c) { return fp.site(c)[0]; };
+  auto owner_at = [&](std::int64_t i, double& shift) { return detail::owner_at(grid, fp, i, shift); };
   if (faces.cells.empty()) return;
   const std::size_t n_faces = faces.cells.size();
   std::vector<double> lo(n_faces), hi(n_faces), face_site(n_faces);
@@ -675,52 +685,21 @@ void for_each_ring_neighbour(const CellGrid<D>& grid, const Footprint<D>& fp, st
 
 }  // namespace detail
 
-/// Remaps `p` onto a multi-level lattice: sets every block's level from the criterion (capped at the
-/// finest level, 2:1 balanced), then builds one particle per kept cell, block by block and in lattice
-/// order within a block, with h = h_over_dx * Delta_l. Mass, momentum and total energy are conserved
-/// exactly as on a uniform lattice.
-template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
-RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
-                              Builder& builder, const RemapParams& params, const Region& region = {},
-                              RemapWorkspace<D>* workspace = nullptr) {
-  ml.validate();
-  RemapWorkspace<D> local;
-  RemapWorkspace<D>& ws = workspace ? *workspace : local;
-  const auto fine = ml.finest();
-  detail::check_remap_input(p, fine, params);
-  const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;  // finest cells per block and axis
-  detail::check_whole_blocks(box, ml);
-  const auto grid = detail::candidate_grid(p, box, fine, params, align);
-  // remap_face_cells picks the old cells to build again by their reach
-  auto& S = detail::accumulate_overlaps(p, box, fine, builder, params, grid, region, ws, ml.max_level > 0);
-  RemapStats stats;
-  stats.max_volume_mismatch = S.max_mismatch;
-  std::array<std::int64_t, D> block0{};
-  const auto field = detail::level0_field(ml, box, grid, S, block0);
-  const auto level = detail::choose_levels(ml, field, block0, stats);
-  const auto fp = detail::footprint(field, level, grid, ml.max_level, align, fine.spacing);
-  const std::size_t n_cells = fp.size();
-  detail::Sums<D> cells;  // each new cell's sums: those of its finest cells
-  cells.resize(n_cells);
-  for (std::size_t f = 0; f < grid.n_cells; ++f) {
-    const std::size_t c = fp.owner[f];
-    cells.m[c] += S.m[f];
-    cells.mv[c] += S.mv[f];
-    cells.E[c] += S.E[f];
-    cells.fill[c] += S.fill[f];
-  }
-  std::vector<double> cell_volume(n_cells);
-  for (std::size_t c = 0; c < n_cells; ++c) cell_volume[c] = std::pow(ml.spacing_at(fp.level[c]), D);
-  if (ml.max_level > 0) {
-    if constexpr (D == 2)
-      detail::remap_face_cells(p, box, fine, builder, grid, region, ws, fp, cells, cell_volume);
-    else
-      detail::remap_face_cells(p, box, fine, params, grid, fp, cells, cell_volume);
-  }
+namespace detail {
+
+/// The end of the multi-level remap: nearly empty cells handed on, one particle per kept cell with h ramped
+/// towards coarser blocks, and the blocks' levels stored for the next remap.
+template <int D, bool E, class Criterion, class Field, class Levels>
+void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml, const RemapParams& params,
+                    const CellGrid<D>& grid, const Footprint<D>& fp, const Field& field, const Levels& level,
+                    const BlockIndex<D>& block0, Sums<D>& cells, const std::vector<double>& cell_volume,
+                    RemapWorkspace<D>& ws, RemapStats& stats) {
   auto& keep = ws.keep;
-  detail::hand_on_sparse_cells<D>(
+  hand_on_sparse_cells<D>(
       cells, params, [&](std::size_t c) { return cell_volume[c]; },
-      [&](std::size_t c, auto&& f) { detail::for_each_ring_neighbour(grid, fp, c, f); }, stats.dropped_cells, keep);
+      [&](std::size_t c, auto&& f) { for_each_ring_neighbour(grid, fp, c, f); }, stats.dropped_cells, keep);
+  const std::size_t n_cells = fp.size();
+  const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;
   auto& order = ws.order;
   order.resize(n_cells);
   std::iota(order.begin(), order.end(), std::size_t{0});
@@ -736,19 +715,87 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
     if (ml.h_ramp > 0.0 && l > 0) {
       // distance to the nearest coarser neighbouring block (2:1 balance: one level coarser)
       const double ramp = ml.h_ramp * ml.spacing_at(l - 1);
-      const double d = detail::distance_to_coarser_block(field, level, block_of[c], site, ramp);
+      const double d = distance_to_coarser_block(field, level, block_of[c], site, ramp);
       if (d < ramp) h += (params.h_over_dx * ml.spacing_at(l - 1) - h) * (1.0 - d / ramp);
     }
     return std::pair{site, h};
   };
-  detail::emit_particles(p, cells, keep, order, place, stats);
+  emit_particles(p, cells, keep, order, place, stats);
   stats.per_level.assign(static_cast<std::size_t>(ml.max_level) + 1, 0);
   for (std::size_t c = 0; c < n_cells; ++c)
     if (keep[c] && cells.m[c] > 0.0) ++stats.per_level[static_cast<std::size_t>(fp.level[c])];
   std::map<std::array<std::int64_t, D>, int> levels;
-  for (std::size_t b = 0; b < level.size(); ++b) levels[detail::absolute_block(field, block0, b)] = level[b];
+  for (std::size_t b = 0; b < level.size(); ++b) levels[absolute_block(field, block0, b)] = level[b];
   ml.store_levels(std::move(levels));
+}
+
+/// The multi-level remap around the sums on the finest cells of `grid`: sums_on(grid, stats) gives them, and
+/// once the level of every block is set, at_faces(fp, faces, stats) gives them again (a second-order remap
+/// takes the old cells that reach a face cell to first order, as the face cells' hand-out is). Then every
+/// block's level from the criterion (capped at the finest level, 2:1 balanced), one particle per kept cell,
+/// block by block and in lattice order within a block, with h = h_over_dx * Delta_l.
+template <int D, class Criterion, class Builder, bool E, class Region, class SumsOn, class AtFaces>
+RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
+                             Builder& builder, const RemapParams& params, const Region& region, RemapWorkspace<D>& ws,
+                             const CellGrid<D>& grid, SumsOn&& sums_on, AtFaces&& at_faces) {
+  const auto fine = ml.finest();
+  const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;  // finest cells per block and axis
+  RemapStats stats;
+  const Sums<D>* S = &sums_on(grid, stats);
+  stats.max_volume_mismatch = S->max_mismatch;
+  std::array<std::int64_t, D> block0{};
+  const auto field = level0_field(ml, box, grid, *S, block0);
+  const auto level = choose_levels(ml, field, block0, stats);
+  const auto fp = footprint(field, level, grid, ml.max_level, align, fine.spacing);
+  Faces faces;
+  if (ml.max_level > 0) {
+    faces = level_faces(grid, fp);
+    S = &at_faces(fp, faces, stats);
+  }
+  const std::size_t n_cells = fp.size();
+  Sums<D> cells;  // each new cell's sums: those of its finest cells
+  cells.resize(n_cells);
+  for (std::size_t f = 0; f < grid.n_cells; ++f) {
+    const std::size_t c = fp.owner[f];
+    cells.m[c] += S->m[f];
+    cells.mv[c] += S->mv[f];
+    cells.E[c] += S->E[f];
+    cells.fill[c] += S->fill[f];
+  }
+  std::vector<double> cell_volume(n_cells);
+  for (std::size_t c = 0; c < n_cells; ++c) cell_volume[c] = std::pow(ml.spacing_at(fp.level[c]), D);
+  if (ml.max_level > 0) {
+    if constexpr (D == 2)
+      remap_face_cells(p, box, fine, builder, grid, region, ws, fp, faces, cells, cell_volume);
+    else
+      remap_face_cells(p, box, fine, params, grid, fp, faces, cells, cell_volume);
+  }
+  emit_on_levels(p, ml, params, grid, fp, field, level, block0, cells, cell_volume, ws, stats);
   return stats;
+}
+
+}  // namespace detail
+
+/// Remaps `p` onto a multi-level lattice (detail::remap_onto_levels), each old cell handing out its mean by
+/// eqs. (6)-(9). Mass, momentum and total energy are conserved exactly as on a uniform lattice.
+template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
+RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
+                              Builder& builder, const RemapParams& params, const Region& region = {},
+                              RemapWorkspace<D>* workspace = nullptr) {
+  ml.validate();
+  RemapWorkspace<D> local;
+  RemapWorkspace<D>& ws = workspace ? *workspace : local;
+  const auto fine = ml.finest();
+  detail::check_remap_input(p, fine, params);
+  detail::check_whole_blocks(box, ml);
+  const auto grid = detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells);
+  return detail::remap_onto_levels(
+      p, box, ml, builder, params, region, ws, grid,
+      [&](const detail::CellGrid<D>& g, RemapStats&) -> detail::Sums<D>& {
+        // remap_face_cells picks the old cells to build again by their reach
+        return detail::accumulate_overlaps(p, box, fine, builder, params, g, region, ws, ml.max_level > 0);
+      },
+      [&](const auto&, const detail::Faces&, RemapStats&) -> detail::Sums<D>& { return ws.sums[0]; });
 }
 
 }  // namespace regularize

@@ -2,7 +2,7 @@
 // The remap's order, one policy axis of the lattice regularizer: the paper's piecewise-constant hand-out
 // (eqs. 6-9) or the limited linear reconstruction of second_order/remap_second.hpp. Both conserve mass,
 // momentum and total energy exactly; the second moves less across cells that the flow does not mix.
-#include "rsph/regularize/second_order/remap_second.hpp"
+#include "rsph/regularize/second_order/remap_second_levels.hpp"
 
 #include <concepts>
 

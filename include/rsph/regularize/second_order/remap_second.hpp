@@ -406,43 +406,63 @@ std::size_t mark_cold_cells(const detail::Sums<D>& S, const std::vector<double>&
   return n;
 }
 
-/// Takes every old cell that may feed a marked new cell (its bounds, widened by a lattice cell) to first
+/// Takes every old cell with a piece in a marked cell of the grid (`marked`, one flag per cell) to first
 /// order; returns how many were newly taken.
-template <class Lattice, int D, bool E>
-std::size_t fall_back_to_first_order(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
-                                     const detail::CellGrid<D>& grid, Workspace<D>& ws) {
+template <int D>
+std::size_t take_to_first_order(std::size_t n_old, const std::vector<std::uint8_t>& marked, Workspace<D>& ws) {
   std::size_t taken = 0;
-  for (std::size_t a = 0; a < p.n_real; ++a) {
+  for (std::size_t a = 0; a < n_old; ++a) {
     if (ws.first_order[a]) continue;
-    Vec<D> lo = Vec<D>::Constant(std::numeric_limits<double>::max()), hi = -lo;
-    for (const auto& v : ws.cells.vertices_of(a)) {
-      lo = lo.cwiseMin(v);
-      hi = hi.cwiseMax(v);
-    }
-    auto r = lattice.cells_touching(box, Vec<D>(lo + p.x[a]), Vec<D>(hi + p.x[a]));
+    const auto& listed = ws.threads[ws.piece_thread[a]].pieces;
     bool feeds = false;
-    std::array<std::int64_t, D> idx;
-    for (int k = 0; k < D; ++k) idx[k] = --r.lo[k];
-    for (int k = 0; k < D; ++k) ++r.hi[k];
-    for (;;) {
-      const std::int64_t f = grid.flat(idx);
-      feeds |= f >= 0 && ws.bad[static_cast<std::size_t>(f)];
-      int k = 0;
-      for (; k < D; ++k) {
-        if (++idx[k] <= r.hi[k]) break;
-        idx[k] = r.lo[k];
-      }
-      if (k == D) break;
-    }
+    for (std::size_t k = ws.piece_first[a], end = k + ws.piece_count[a]; k < end; ++k)
+      feeds |= marked[listed.flat[k]] != 0;
     if (!feeds) continue;
     ws.first_order[a] = 1;
-    auto& rc = ws.recon[a];
-    rc.g_rho.setZero();
-    rc.G_v.setZero();
-    rc.g_e.setZero();
+    auto& r = ws.recon[a];
+    r.g_rho.setZero();
+    r.G_v.setZero();
+    r.g_e.setZero();
     ++taken;
   }
   return taken;
+}
+
+/// Hands every old cell out into ws.sums[0], again and again while a new particle falls below the thermal
+/// floor, each time with the cells that feed one at first order.
+template <int D, bool E>
+void hand_out_above_floor(const ParticleSet<D, E>& p, const SecondOrderParams& second, std::size_t n_cells,
+                          RemapWorkspace<D>& ws, Workspace<D>& w2, RemapStats& stats) {
+  for (stats.passes = 1;; ++stats.passes) {
+    hand_out_all(p, second.limit, n_cells, w2, ws.sums);
+    if constexpr (!E) break;
+    if (mark_cold_cells(ws.sums[0], w2.u_min[0], second.thermal_floor, w2.bad) == 0) break;
+    const std::size_t taken = take_to_first_order(p.n_real, w2.bad, w2);
+    stats.first_order_cells += taken;
+    if (taken == 0) break;  // every feeder is at first order already: nothing left to fall back on
+  }
+}
+
+/// The second-order sums on the cells of `grid`: every old cell built and kept, its gradients fitted, its
+/// pieces listed and handed out; lands in ws.sums[0].
+template <class Lattice, class Builder, int D, bool E, class Region>
+detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
+                                   Builder& builder, const RemapParams& params, const SecondOrderParams& second,
+                                   const Region& region, const detail::CellGrid<D>& grid, RemapWorkspace<D>& ws,
+                                   Workspace<D>& w2, RemapStats& stats) {
+  if constexpr (D == 1)
+    collect_cells(p, box, lattice, params, grid, w2.cells);
+  else
+    collect_cells(p, box, builder, params, region, ws.closing, w2.by_thread, w2.lookup, w2.cells);
+  w2.recon.resize(p.n_real);
+  reconstruct_density(p, w2.cells, w2.recon);
+  reconstruct_motion(p, w2.cells, w2.recon);
+  list_pieces(p, box, lattice, params, second.limit, grid, w2);
+  w2.first_order.assign(p.n_real, 0);
+  hand_out_above_floor(p, second, grid.n_cells, ws, w2, stats);
+  for (const auto& r : w2.recon) stats.limited_cells += r.limited;
+  stats.max_volume_mismatch = ws.sums[0].max_mismatch;
+  return ws.sums[0];
 }
 
 }  // namespace second_order
@@ -463,26 +483,8 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   second_order::Workspace<D>& w2 = ws2 ? *ws2 : local2;
   const auto grid = detail::candidate_grid(p, box, lattice, params);
-  if constexpr (D == 1)
-    second_order::collect_cells(p, box, lattice, params, grid, w2.cells);
-  else
-    second_order::collect_cells(p, box, builder, params, region, ws.closing, w2.by_thread, w2.lookup, w2.cells);
-  w2.recon.resize(p.n_real);
-  second_order::reconstruct_density(p, w2.cells, w2.recon);
-  second_order::reconstruct_motion(p, w2.cells, w2.recon);
-  second_order::list_pieces(p, box, lattice, params, second.limit, grid, w2);
   RemapStats stats;
-  w2.first_order.assign(p.n_real, 0);
-  for (stats.passes = 1;; ++stats.passes) {
-    second_order::hand_out_all(p, second.limit, grid.n_cells, w2, ws.sums);
-    if constexpr (!E) break;
-    if (second_order::mark_cold_cells(ws.sums[0], w2.u_min[0], second.thermal_floor, w2.bad) == 0) break;
-    const std::size_t taken = second_order::fall_back_to_first_order(p, box, lattice, grid, w2);
-    stats.first_order_cells += taken;
-    if (taken == 0) break;  // every feeder is at first order already: nothing left to fall back on
-  }
-  for (const auto& r : w2.recon) stats.limited_cells += r.limited;
-  stats.max_volume_mismatch = ws.sums[0].max_mismatch;
+  second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2, stats);
   detail::emit_on_lattice(p, box, lattice, params, grid, ws.sums[0], ws, stats);
   return stats;
 }

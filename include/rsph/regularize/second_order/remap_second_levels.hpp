@@ -1,0 +1,55 @@
+#pragma once
+// The second-order remap onto multi-level lattices: the second-order sums on the finest cells, then the
+// multi-level remap's levels, face cells and emission (multilevel.hpp). The face cells take their shares by a
+// first-order hand-out over their Voronoi cells, so the old cells that reach a face cell hand out at first
+// order everywhere: each old cell stays exactly conservative.
+#include "rsph/regularize/multilevel.hpp"
+#include "rsph/regularize/second_order/remap_second.hpp"
+
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+namespace rsph::regularize {
+
+template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
+RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
+                              Builder& builder, const RemapParams& params, const SecondOrderParams& second,
+                              const Region& region = {}, RemapWorkspace<D>* workspace = nullptr,
+                              second_order::Workspace<D>* ws2 = nullptr) {
+  ml.validate();
+  second.validate();
+  RemapWorkspace<D> local;
+  second_order::Workspace<D> local2;
+  RemapWorkspace<D>& ws = workspace ? *workspace : local;
+  second_order::Workspace<D>& w2 = ws2 ? *ws2 : local2;
+  const auto fine = ml.finest();
+  detail::check_remap_input(p, fine, params);
+  detail::check_whole_blocks(box, ml);
+  const auto grid = detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells);
+  auto sums_on = [&](const detail::CellGrid<D>& g, RemapStats& stats) -> detail::Sums<D>& {
+    auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats);
+    if constexpr (D == 2) {  // the face hand-out builds again the old cells whose reach meets a face cell
+      ws.reach.resize(p.n_real);
+      for (std::size_t a = 0; a < p.n_real; ++a) {
+        double r2 = 0.0;
+        for (const auto& v : w2.cells.vertices_of(a)) r2 = std::max(r2, v.squaredNorm());
+        ws.reach[a] = std::sqrt(r2);
+      }
+    }
+    return S;
+  };
+  auto at_faces = [&](const auto& fp, const detail::Faces& faces, RemapStats& stats) -> detail::Sums<D>& {
+    std::vector<std::uint8_t> in_face(grid.n_cells);
+    for (std::size_t f = 0; f < grid.n_cells; ++f) in_face[f] = faces.face_of[fp.owner[f]] >= 0;
+    const std::size_t taken = second_order::take_to_first_order(p.n_real, in_face, w2);
+    if (taken > 0) {
+      stats.first_order_cells += taken;
+      second_order::hand_out_above_floor(p, second, grid.n_cells, ws, w2, stats);
+    }
+    return ws.sums[0];
+  };
+  return detail::remap_onto_levels(p, box, ml, builder, params, region, ws, grid, sums_on, at_faces);
+}
+
+}  // namespace rsph::regularize
