@@ -30,7 +30,7 @@ struct PlanetDiskParams {
   double orbits = 100.0;           ///< planet orbits to run
   double r_in = 0.4, r_out = 2.5;  ///< the disk
   double zone_width = 0.1;         ///< width of the boundary zones on fixed orbits
-  double sigma0 = 0.0002 / std::numbers::pi;        ///< eq. (19), M_* / (pi a^2) units
+  double sigma0 = 0.002 / std::numbers::pi;         ///< eq. (19)'s value 6.366e-4 (de Val-Borro's 0.002 / pi), M_* / a^2
   double aspect = 0.05;                             ///< c_s / v_K
   double gamma = 1.4;                               ///< polytropic exponent (eq. 21)
   double softening = 0.03;                          ///< planet potential, in units of a
