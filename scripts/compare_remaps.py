@@ -24,6 +24,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from rsph_plot import read_csv, run_example, save_figure  # noqa: E402
@@ -144,7 +145,7 @@ def write_tables(a, results):
 
 
 def error_cost_chart(a, results):
-    panels = [("ring", "|nu_eff / nu_s - 1|", lambda s: abs(s["nu_eff_over_nu_s"] - 1.0)),
+    panels = [("ring", "|nu_eff / nu_s - 1| (labels: c_r, h/Delta)", lambda s: abs(s["nu_eff_over_nu_s"] - 1.0)),
               ("kh", "1 / amplification by tau_KH", lambda s: 1.0 / s["amplification"]),
               ("disk", "gap depth Sigma / Sigma_0 (FARGO3D: 0.098)", lambda s: s["gap_depth"])]
     panels = [p for p in panels if any(k[0] == p[0] for k in results)]
@@ -153,12 +154,23 @@ def error_cost_chart(a, results):
     fig, axes = plt.subplots(1, len(panels), figsize=(5.2 * len(panels), 4.2), squeeze=False)
     for ax, (name, ylabel, err) in zip(axes[0], panels):
         for order, style in zip(ORDERS, ("o-", "s-")):
-            pts = sorted((s["wall_seconds"], err(s)) for (n, _, o), (s, _) in results.items()
-                         if n == name and o == order)
-            if pts:
-                ax.plot([p[0] for p in pts], [p[1] for p in pts], style, label=f"{order}-order remap")
+            pts = sorted((s["wall_seconds"], err(s), " ".join(f"{v}" for _, v in st))
+                         for (n, st, o), (s, _) in results.items() if n == name and o == order)
+            if pts:  # the ring's runs differ in c_r and h/Delta, not in cost alone: points, no line
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], style[0] if name == "ring" else style,
+                        label=f"{order}-order remap")
+                for x, y, tag in pts:
+                    ax.annotate(tag, (x, y), textcoords="offset points", xytext=(3, 3), fontsize=7)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        xs = [x for line in ax.get_lines() for x in line.get_xdata()]
+        ys = [y for line in ax.get_lines() for y in line.get_ydata()]
+        if xs:
+            ax.set_xlim(min(xs) / 1.5, max(xs) * 1.5)
+            ax.set_ylim(min(ys) / 1.5, max(ys) * 1.5)
+        for axis in (ax.xaxis, ax.yaxis):
+            axis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
+            axis.set_minor_formatter(NullFormatter())
         ax.set_xlabel("wall seconds (one thread)")
         ax.set_ylabel(ylabel)
         ax.set_title(name)
