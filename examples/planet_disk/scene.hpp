@@ -30,11 +30,11 @@ struct PlanetDiskParams {
   double orbits = 100.0;           ///< planet orbits to run
   double r_in = 0.4, r_out = 2.5;  ///< the disk
   double zone_width = 0.1;         ///< width of the boundary zones on fixed orbits
-  double sigma0 = 0.002 / std::numbers::pi;         ///< eq. (19)'s value 6.366e-4 (de Val-Borro's 0.002 / pi), M_* / a^2
-  double aspect = 0.05;                             ///< c_s / v_K
-  double gamma = 1.4;                               ///< polytropic exponent (eq. 21)
-  double softening = 0.03;                          ///< planet potential, in units of a
-  double ramp_orbits = 5.0;                         ///< eq. (20)
+  double sigma0 = 0.002 / std::numbers::pi;  ///< eq. (19)'s value 6.366e-4 (de Val-Borro's 0.002 / pi), M_* / a^2
+  double aspect = 0.05;                      ///< c_s / v_K
+  double gamma = 1.4;                        ///< polytropic exponent (eq. 21)
+  double softening = 0.03;                   ///< planet potential, in units of a
+  double ramp_orbits = 5.0;                  ///< eq. (20)
   double N_min = 4.5, N_max = 107.0, dN_max = 0.8;  ///< Appendix A, the paper's §5 values
   int max_steps = 160;
   double alpha = 1.0, beta = 2.0;      ///< SPH artificial viscosity
