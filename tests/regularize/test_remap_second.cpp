@@ -186,9 +186,8 @@ TEST_CASE("second-order remap conserves mass, momentum and total energy exactly"
     }
     const auto stats =
         remap_checking_conservation(p, box_with(Edge::periodic, Edge::periodic), lattice::Square{1.0 / 24});
-    for (std::size_t a = 0; a < p.n_real; ++a) CHECK(p.u[a] >= 0.5);
     INFO("first-order cells " << stats.first_order_cells << ", passes " << stats.passes);
-    CHECK(stats.passes >= 1);
+    for (std::size_t a = 0; a < p.n_real; ++a) CHECK(p.u[a] >= 0.5);  // the floor: half the coldest feeder's u
   }
   SECTION("1D: periodic, walls and open ends") {
     for (const Edge edge : {Edge::periodic, Edge::reflecting, Edge::open}) {
