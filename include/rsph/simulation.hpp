@@ -159,6 +159,34 @@ class Simulation {
     compute_rates();
   }
 
+  /// Saves or restores (ar.saving()) everything a later step reads, through a checkpoint archive
+  /// (io/checkpoint.hpp): the real particles with their rates (taken at the predicted state, so they cannot be
+  /// recomputed from the final one), the signal speeds, d rho/dt, the clocks and counters, the regularizer's
+  /// state and the consistent-gradient solve's warm start. Restored, the next step continues bit for bit as
+  /// the saved run would have: it rebuilds ghosts, neighbours and every other pass from these.
+  template <class Archive>
+  void checkpoint(Archive& ar) {
+    const auto scope = ar.scope("simulation");
+    p_.checkpoint(ar);
+    ar("v_sig", v_sig_);
+    ar("drho_dt", drho_dt_);
+    ar("time", time_);
+    ar("step", step_);
+    ar("particle_updates", particle_updates_);
+    ar("regularizations", regularizations_);
+    ar("kinetic_removed", kinetic_removed_);
+    ar("steps_since_regularization", since_.steps);
+    ar("time_since_regularization", since_.time);
+    ar("seconds_neighbors", times_.neighbors);
+    ar("seconds_density", times_.density);
+    ar("seconds_forces", times_.forces);
+    ar("seconds_integrate", times_.integrate);
+    ar("seconds_regularization", times_.regularization);
+    if constexpr (requires { reg_.checkpoint(ar); }) reg_.checkpoint(ar);
+    if constexpr (corrected) cg_.checkpoint(ar);
+    if (!ar.saving() && params_.max_bin > 0) blocks_.evaluated_all(p_, time_);  // a block ends synchronised
+  }
+
   /// Steps until t_end, calling on_step(*this) after each step.
   template <class OnStep>
   void run_until(double t_end, OnStep&& on_step) {

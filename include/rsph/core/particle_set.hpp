@@ -1,6 +1,7 @@
 #pragma once
 // Particle data as structure of arrays; ghosts live at the tail, after the n_real real particles.
 #include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
 
 #include <algorithm>
 #include <cstddef>
@@ -53,6 +54,40 @@ struct ParticleSet {
     }
     frozen.push_back(0);
     n_real = x.size();
+  }
+
+  /// Saves or restores (ar.saving()) the real particles through a checkpoint archive (io/checkpoint.hpp):
+  /// every field the next step reads, rates included. Ghosts are left out, for the next step rebuilds them,
+  /// and when saving they stay in place for whatever reads them before that step.
+  template <class Archive>
+  void checkpoint(Archive& ar) {
+    const auto scope = ar.scope("particles");
+    ParticleSet real;
+    if (ar.saving()) {
+      real = *this;
+      real.clear_ghosts();
+    }
+    ParticleSet& p = ar.saving() ? real : *this;
+    ar("m", p.m);
+    ar("rho", p.rho);
+    ar("h", p.h);
+    ar("P", p.P);
+    ar("cs", p.cs);
+    ar("x", p.x);
+    ar("v", p.v);
+    ar("dv_dt", p.dv_dt);
+    if constexpr (HasEnergy) {
+      ar("u", p.u);
+      ar("du_dt", p.du_dt);
+    }
+    ar("frozen", p.frozen);
+    if (ar.saving()) return;
+    n_real = x.size();
+    ghost_source.clear();
+    const auto n = n_real;
+    if (m.size() != n || h.size() != n || rho.size() != n || P.size() != n || cs.size() != n || v.size() != n ||
+        dv_dt.size() != n || u.size() != (HasEnergy ? n : 0) || du_dt.size() != u.size() || frozen.size() != n)
+      throw InputError("checkpoint: the particle fields differ in length");
   }
 
   /// Drops every ghost.

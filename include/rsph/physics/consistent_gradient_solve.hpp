@@ -29,6 +29,19 @@ class ConsistentGradientWorkspace {
   CgResult last;                   ///< the last solve, summed over axes
   std::uint64_t solves = 0, iterations = 0;
 
+  /// Saves or restores what the next pass reads: psi (its warm start, or kept) and the band, and the counts.
+  template <class Archive>
+  void checkpoint(Archive& ar) {
+    const auto scope = ar.scope("consistent_gradient");
+    ar("psi", psi);
+    ar("band", band);
+    ar("solves", solves);
+    ar("iterations", iterations);
+    ar("last_iterations", last.iterations);
+    ar("last_residual", last.relative_residual);
+    ar("last_converged", last.converged);
+  }
+
   /// New particles (after a remap): the next pass solves afresh.
   void reset() { psi.clear(); }
 

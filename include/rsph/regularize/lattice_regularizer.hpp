@@ -10,6 +10,8 @@
 #include "rsph/regularize/schedule.hpp"
 
 #include <chrono>
+#include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -22,6 +24,65 @@ struct Record {
   RemapStats stats;
   double seconds = 0.0;
 };
+
+/// Saves or restores a regularization log through a checkpoint archive, one column per figure.
+template <class Archive>
+void checkpoint_log(Archive& ar, std::vector<Record>& log) {
+  const auto scope = ar.scope("log");
+  std::size_t n = log.size();
+  ar("count", n);
+  log.resize(n);
+  auto column = [&](const char* name, auto get) {
+    using T = std::decay_t<decltype(get(log.front()))>;
+    std::vector<T> c(n);
+    for (std::size_t k = 0; k < n; ++k) c[k] = get(log[k]);
+    ar(name, c);
+    require(c.size() == n, std::string("checkpoint: the regularization log's column ") + name + " is short");
+    for (std::size_t k = 0; k < n; ++k) get(log[k]) = c[k];
+  };
+  column(
+      "step", [](Record & r) -> auto& { return r.step; });
+  column(
+      "time", [](Record & r) -> auto& { return r.time; });
+  column(
+      "seconds", [](Record & r) -> auto& { return r.seconds; });
+  column(
+      "n_before", [](Record & r) -> auto& { return r.stats.n_before; });
+  column(
+      "n_after", [](Record & r) -> auto& { return r.stats.n_after; });
+  column(
+      "kinetic_converted", [](Record & r) -> auto& { return r.stats.kinetic_converted; });
+  column(
+      "max_volume_mismatch", [](Record & r) -> auto& { return r.stats.max_volume_mismatch; });
+  column(
+      "dropped_cells", [](Record & r) -> auto& { return r.stats.dropped_cells; });
+  column(
+      "capped_blocks", [](Record & r) -> auto& { return r.stats.capped_blocks; });
+  column(
+      "requested_level", [](Record & r) -> auto& { return r.stats.requested_level; });
+  column(
+      "first_order_cells", [](Record & r) -> auto& { return r.stats.first_order_cells; });
+  column(
+      "passes", [](Record & r) -> auto& { return r.stats.passes; });
+  column(
+      "limited_cells", [](Record & r) -> auto& { return r.stats.limited_cells; });
+  std::vector<std::size_t> levels, per_level;  // the per-level counts, flattened
+  for (const auto& r : log) {
+    levels.push_back(r.stats.per_level.size());
+    per_level.insert(per_level.end(), r.stats.per_level.begin(), r.stats.per_level.end());
+  }
+  ar("levels", levels);
+  ar("per_level", per_level);
+  if (ar.saving()) return;
+  require(levels.size() == n, "checkpoint: the regularization log's level counts are short");
+  std::size_t at = 0;
+  for (std::size_t k = 0; k < n; ++k) {
+    require(at + levels[k] <= per_level.size(), "checkpoint: the regularization log's level counts are short");
+    log[k].stats.per_level.assign(per_level.begin() + static_cast<std::ptrdiff_t>(at),
+                                  per_level.begin() + static_cast<std::ptrdiff_t>(at + levels[k]));
+    at += levels[k];
+  }
+}
 
 template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi, class Region = region::Unbounded,
           class Order = FirstOrder>
@@ -78,6 +139,15 @@ class LatticeRegularizer {
   }
 
   const std::vector<Record>& log() const { return log_; }
+
+  /// Saves or restores what later regularizations read or report: the log, and a multi-level lattice's
+  /// levels (its hysteresis). Schedules decide from the step's counters and fields alone.
+  template <class Archive>
+  void checkpoint(Archive& ar) {
+    const auto scope = ar.scope("regularizer");
+    checkpoint_log(ar, log_);
+    if constexpr (requires { lattice_.checkpoint(ar); }) lattice_.checkpoint(ar);
+  }
   const Lattice& lattice() const { return lattice_; }
   Schedule& schedule() { return schedule_; }
   const RemapParams& params() const { return params_; }

@@ -64,6 +64,27 @@ struct MultiLevel {
   }
   void store_levels(std::map<std::array<std::int64_t, D>, int> levels) { levels_ = std::move(levels); }
 
+  /// Saves or restores the blocks' levels through a checkpoint archive (io/checkpoint.hpp).
+  template <class Archive>
+  void checkpoint(Archive& ar) {
+    std::vector<std::int64_t> blocks;
+    std::vector<int> levels;
+    for (const auto& [block, level] : levels_) {
+      blocks.insert(blocks.end(), block.begin(), block.end());
+      levels.push_back(level);
+    }
+    ar("lattice_blocks", blocks);
+    ar("lattice_levels", levels);
+    if (ar.saving()) return;
+    require(blocks.size() == D * levels.size(), "checkpoint: the lattice's block levels are misshapen");
+    levels_.clear();
+    for (std::size_t k = 0; k < levels.size(); ++k) {
+      std::array<std::int64_t, D> block;
+      std::copy_n(blocks.begin() + static_cast<std::ptrdiff_t>(D * k), D, block.begin());
+      levels_.emplace(block, levels[k]);
+    }
+  }
+
  private:
   std::map<std::array<std::int64_t, D>, int> levels_;
 };
