@@ -589,6 +589,32 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
 
  private:
   friend class detail::WideningBuilder<BoostVoronoi>;
+
+  /// The chosen particles (ascending) with a site of their own or an adjacent group closer than 1e4 quanta:
+  /// there the quantized diagram's neighbours may not be the true ones (pairs 1e-9 of a spacing apart; far
+  /// outliers that coarsen the quanta), so their cells are checked against every site that can cut them.
+  static std::vector<std::uint32_t> doubtful_cells(const SitesWithImages& sites,
+                                                   const std::vector<std::uint32_t>& group_of,
+                                                   const std::vector<std::vector<std::uint32_t>>& members,
+                                                   const std::vector<std::vector<std::uint32_t>>& adjacent,
+                                                   double quantum, std::span<const std::uint32_t> only) {
+    const double close2 = (1e4 * quantum) * (1e4 * quantum);
+    std::vector<std::uint32_t> doubtful;
+    for (std::size_t k = 0; k < detail::chosen_count(sites.n_real, only); ++k) {
+      const std::size_t a = detail::chosen(only, k);
+      bool close = false;
+      auto near = [&](std::uint32_t group) {
+        for (const std::uint32_t b : members[group])
+          close = close || (b != a && (sites.x[b] - sites.x[a]).squaredNorm() < close2);
+      };
+      near(group_of[a]);
+      for (const std::uint32_t nb : adjacent[group_of[a]]) near(nb);
+      if (close) doubtful.push_back(static_cast<std::uint32_t>(a));
+    }
+    std::sort(doubtful.begin(), doubtful.end());
+    return doubtful;
+  }
+
   template <class Visitor>
   bool try_build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
                  double margin, Visitor& visit, std::span<const std::uint32_t> only) {
@@ -632,6 +658,9 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
         e = e->next();
       } while (e != c.incident_edge());
     }
+    const auto doubtful = doubtful_cells(sites, group_of, members, adjacent, extent / quantization_levels, only);
+    neighbors::CellList<2> lookup;  // only where quantization may have hidden a neighbour
+    if (!doubtful.empty()) lookup.build(sites.x, detail::mean_spacing(x, box));
     std::atomic<bool> ok{true};
     rsph::run_parallel(detail::chosen_count(sites.n_real, only), [&](int thread, std::size_t begin, std::size_t end) {
       ConvexPolygon buffers[2];
@@ -658,6 +687,16 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
         for (std::uint32_t nb : adjacent[g]) {
           if (cell->empty()) break;
           cut_group(nb);
+        }
+        if (!cell->empty() && std::binary_search(doubtful.begin(), doubtful.end(), static_cast<std::uint32_t>(a))) {
+          // every site that can still cut the cell lies within twice its farthest vertex: cut by them all
+          const double reach = 2.0 * std::sqrt(detail::max_radius2_origin(*cell));
+          lookup.for_each_within(xa, reach, [&](std::uint32_t b) {
+            const Point d = sites.x[b] - xa;
+            if (b == a || cell->empty() || d.squaredNorm() >= reach * reach) return;
+            if (d.squaredNorm() == 0.0) return cell->clear();
+            if (detail::cut_by_bisector(*cell, d, *scratch)) std::swap(cell, scratch);
+          });
         }
         if (!detail::finish_cell(cell, scratch, a, xa, box, margin, closing, detail::max_radius2_origin(*cell))) {
           ok.store(false, std::memory_order_relaxed);
