@@ -56,8 +56,11 @@ struct CommonOptions {
   int threads = 0;
   bool quiet = false;
   bool overwrite = false;
-  std::string config;        ///< a params.cfg (Boost.Program_options' config-file syntax) read under the flags
-  std::string command_line;  ///< as given, for summary.json
+  double checkpoint_every = 0.0;  ///< in the scene's unit; 0: checkpoints only at --max-wall and on signals
+  double max_wall = 0.0;          ///< minutes; 0: no limit
+  std::string resume;             ///< a run's folder to continue from its checkpoint
+  std::string config;             ///< a params.cfg (Boost.Program_options' config-file syntax) read under the flags
+  std::string command_line;       ///< as given, for summary.json
   /// Every parameter as resolved (presets applied), one `name = value` line each: params.cfg.
   std::vector<std::pair<std::string, std::string>> parameters;
   /// While the flags are parsed: each flag's name and how to print its field (see Flags, record_run).
@@ -94,9 +97,10 @@ inline void add_remap_flag(Flags& flag, std::string& remap) {
        "RSPH: the remap's order, first (the paper's eqs. 6-9) or second (limited linear reconstruction)");
 }
 
-/// --help, --out, --preset, --threads, --quiet, --overwrite and --config; `quick` says what the quick preset
-/// changes (flags given keep their values).
-inline void add_common_options(Flags& flag, CommonOptions& common, const std::string& quick) {
+/// --help, --out, --preset, --threads, --quiet, --overwrite, --config and the checkpoint flags; `quick` says
+/// what the quick preset changes (flags given keep their values), `unit` the unit of --checkpoint-every.
+inline void add_common_options(Flags& flag, CommonOptions& common, const std::string& quick,
+                               const std::string& unit = "simulated time") {
   const std::string preset = "paper: the paper's setup; quick: a small run in seconds (" + quick + ")";
   auto& desc = flag.description();
   desc.add_options()("help,h", "show this help and exit");
@@ -108,6 +112,12 @@ inline void add_common_options(Flags& flag, CommonOptions& common, const std::st
   flag("preset", common.preset, preset.c_str());
   flag("threads", common.threads, "OpenMP threads (0: all cores)");
   flag("quiet", common.quiet, "no progress line");
+  const std::string every =
+      "write DIR/checkpoint.h5 every so much " + unit + " (0: only at --max-wall and on SIGINT or SIGTERM)";
+  flag("checkpoint-every", common.checkpoint_every, every.c_str());
+  flag("max-wall", common.max_wall, "stop with a checkpoint after this many wall-clock minutes (0: no limit)");
+  desc.add_options()("resume", po::value(&common.resume),
+                     "continue the run in folder DIR from its checkpoint, with its params.cfg (flags given win)");
 }
 
 /// --levels, --block-cells, --refine-above, --coarsen-below and --h-ramp, defaulting to c's values; `who`
@@ -123,12 +133,31 @@ inline void add_level_options(Flags& flag, DensityJumpLevels& c, const std::stri
        (who + ": coarser spacings over which h rises towards a coarser block (0: h jumps)").c_str());
 }
 
+/// The folder of a run to resume: it must hold its checkpoint. `tidy`: files a killed run left half-written go.
+inline std::filesystem::path resume_output(const std::filesystem::path& dir, bool tidy = true) {
+  if (!std::filesystem::is_regular_file(dir / "checkpoint.h5"))
+    throw InputError("--resume: no checkpoint in '" + dir.string() +
+                     "' (write one with --checkpoint-every or --max-wall)");
+  if (!tidy) return dir;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() > 8 && name.rfind(".partial") == name.size() - 8) std::filesystem::remove(e.path());
+  }
+  return dir;
+}
+
 /// Parses argv; returns false when --help was shown. Unknown flags throw with their name.
 inline bool parse(int argc, char** argv, const po::options_description& desc, po::variables_map& vm,
                   const std::string& usage) {
   po::store(po::parse_command_line(argc, argv, desc), vm);
-  if (vm.count("config") && !vm.count("help")) {  // under the command line: a flag given there wins
-    const std::string file = vm["config"].as<std::string>();
+  if (vm.count("resume") && (vm.count("config") || !vm["out"].defaulted()))
+    throw InputError("--resume DIR reads DIR/params.cfg and writes to DIR: leave out --config and --out");
+  if (vm.count("resume") && !vm.count("help"))
+    resume_output(vm["resume"].as<std::string>(), false);                 // refuses a folder without a checkpoint first
+  if ((vm.count("config") || vm.count("resume")) && !vm.count("help")) {  // under the command line: flags win
+    const std::string file = vm.count("config")
+                                 ? vm["config"].as<std::string>()
+                                 : (std::filesystem::path(vm["resume"].as<std::string>()) / "params.cfg").string();
     if (!std::filesystem::is_regular_file(file)) throw InputError("--config: no file '" + file + "'");
     po::store(po::parse_config_file<char>(file.c_str(), desc), vm);
   }
@@ -142,6 +171,14 @@ inline bool parse(int argc, char** argv, const po::options_description& desc, po
   }
   po::notify(vm);
   return true;
+}
+
+/// Checks what the checkpoint flags were given.
+inline void check_checkpoint_flags(const CommonOptions& common) {
+  require(common.checkpoint_every >= 0.0,
+          "--checkpoint-every must be 0 or positive (got " + default_text(common.checkpoint_every) + ")");
+  require(common.max_wall >= 0.0,
+          "--max-wall must be 0 or a positive number of minutes (got " + default_text(common.max_wall) + ")");
 }
 
 /// A comma-separated list of finite numbers given to flag `what`; anything else is an input error.
@@ -201,11 +238,37 @@ inline bool run_output(const std::filesystem::path& entry) {
          (name.size() > 8 && name.rfind(".partial") == name.size() - 8);
 }
 
+/// The output folder of a run. A run that fails before writing anything but params.cfg (bad input found once
+/// the simulation is built) leaves nothing behind: params.cfg goes, and the folder too when this run made it.
+class OutputFolder : public std::filesystem::path {
+ public:
+  OutputFolder(std::filesystem::path dir, bool made, bool resumed)
+      : std::filesystem::path(std::move(dir)), made_(made), resumed_(resumed) {}
+  OutputFolder(const OutputFolder&) = delete;
+  OutputFolder& operator=(const OutputFolder&) = delete;
+  ~OutputFolder() {
+    if (resumed_ || std::uncaught_exceptions() <= exceptions_) return;
+    std::error_code ec;
+    std::size_t others = 0;
+    for (const auto& e : std::filesystem::directory_iterator(*this, ec)) others += e.path().filename() != "params.cfg";
+    if (ec || others > 0) return;
+    std::filesystem::remove(*this / "params.cfg", ec);
+    if (made_) std::filesystem::remove(*this, ec);
+  }
+
+ private:
+  bool made_, resumed_;
+  int exceptions_ = std::uncaught_exceptions();
+};
+
 /// Prepares the output folder: refuses one that holds an earlier run's files unless --overwrite, which removes
 /// those files first (and nothing else); then writes params.cfg, every resolved parameter, so that
 /// `--config DIR/params.cfg` repeats the run.
-inline std::filesystem::path prepare_output(const CommonOptions& common) {
+inline OutputFolder prepare_output(const CommonOptions& common) {
+  check_checkpoint_flags(common);
+  if (!common.resume.empty()) return {resume_output(common.resume), false, true};
   const std::filesystem::path dir(common.out);
+  const bool made = !std::filesystem::exists(dir);
   if (std::filesystem::is_directory(dir)) {
     std::vector<std::filesystem::path> earlier;
     for (const auto& e : std::filesystem::directory_iterator(dir))
@@ -220,11 +283,16 @@ inline std::filesystem::path prepare_output(const CommonOptions& common) {
   std::string cfg = "# " + common.command_line + "\n";
   for (const auto& [name, value] : common.parameters) cfg += name + " = " + value + "\n";
   io::write_text_file(dir / "params.cfg", cfg);
-  return dir;
+  return {dir, made, false};
 }
 
+/// A run that stopped early with a checkpoint written (--max-wall, SIGINT, SIGTERM): exit code 5.
+struct Stopped : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 /// Runs body() and turns errors into one message and an exit code: 2 bad input, 3 numerical failure,
-/// 4 anything else.
+/// 4 anything else, 5 stopped early with a checkpoint.
 inline int guarded_main(const char* program, const std::function<int()>& body) {
   try {
     return body();
@@ -237,6 +305,9 @@ inline int guarded_main(const char* program, const std::function<int()>& body) {
   } catch (const NumericalError& e) {
     fmt::print(stderr, "{}: the run failed: {}\n", program, e.what());
     return 3;
+  } catch (const Stopped& e) {
+    fmt::print(stderr, "{}: {}\n", program, e.what());
+    return 5;
   } catch (const std::exception& e) {
     fmt::print(stderr, "{}: error: {}\n", program, e.what());
     return 4;

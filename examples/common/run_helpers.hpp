@@ -45,6 +45,10 @@ class ConservationLog {
     csv_.row(std::vector<double>(row.begin(), row.end()));
   }
   void close() { csv_.close(); }
+  template <class Archive>
+  void checkpoint(Archive& ar) {
+    csv_.checkpoint(ar, "conservation");
+  }
 
  private:
   static std::vector<std::string> columns() {
@@ -70,7 +74,22 @@ struct RunCost {
     started_ = std::chrono::steady_clock::now();
     particles_initial = sim.particles().n_real;
   }
-  double elapsed() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count(); }
+  /// Wall seconds of the run so far, those before a resume included.
+  double elapsed() const {
+    return earlier_seconds_ + std::chrono::duration<double>(std::chrono::steady_clock::now() - started_).count();
+  }
+  /// Saves or restores the figures that accumulate (a checkpoint archive, io/checkpoint.hpp).
+  template <class Archive>
+  void checkpoint(Archive& ar) {
+    const auto scope = ar.scope("cost");
+    double seconds = elapsed();
+    ar("wall_seconds", seconds);
+    ar("particle_steps", particle_steps_);
+    if (!ar.saving()) {
+      earlier_seconds_ = seconds;
+      started_ = std::chrono::steady_clock::now();
+    }
+  }
   /// After a call of step() that began at steps_before: a block of individual steps counts each.
   template <class Sim>
   void count_steps(const Sim& sim, std::uint64_t steps_before) {
@@ -89,6 +108,7 @@ struct RunCost {
 
  private:
   std::chrono::steady_clock::time_point started_;
+  double earlier_seconds_ = 0.0;  ///< before a resume
   double particle_steps_ = 0.0;
 };
 

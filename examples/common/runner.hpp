@@ -4,6 +4,7 @@
 // leaving the domain, the conservation log), a hook at the start and at each stop (snapshots, measures),
 // the cost recorded the same way for all, and a progress line. The figures every summary.json carries
 // are written by one function too.
+#include "common/checkpoints.hpp"
 #include "common/cli.hpp"
 #include "common/run_helpers.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
@@ -13,6 +14,7 @@
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace rsph::examples {
@@ -57,6 +59,18 @@ inline std::vector<AtTime> evenly(double t_end, int n) {
   return stops;
 }
 
+/// Refuses an end time the run could never reach: more than 1e10 steps of the present time step (--t-end
+/// 1e300 would otherwise run until stopped, writing curves all the while).
+template <class Sim, class Stop>
+void check_reachable(const Sim& sim, const std::vector<Stop>& stops) {
+  if constexpr (std::is_same_v<Stop, AtTime>) {
+    if (stops.empty()) return;
+    const double steps = (stops.back().t - sim.time()) / sim.time_step();
+    require(steps < 1e10, "the end time " + default_text(stops.back().t) + " lies " + fmt::format("{:.1e}", steps) +
+                              " steps of " + default_text(sim.time_step()) + " away: choose a reachable end time");
+  }
+}
+
 /// Hooks that do nothing, for a run that needs none.
 struct NoHook {
   template <class... A>
@@ -65,18 +79,24 @@ struct NoHook {
 
 /// Steps `sim` through `stops` in turn. after_step(sim) follows every call of step() (a block of
 /// individual steps is one call; the programs update their progress line there); at_stop(sim, k) comes
-/// at the start (k = -1) and at each stop k. Returns what the run cost.
+/// at the start (k = -1) and at each stop k. With `checkpoints`, a checkpoint may follow each step, and a
+/// resumed run restores sim and continues towards the stop it was heading for. Returns what the run cost.
 template <class Sim, class Stop, class AfterStep, class AtStop>
-RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_step, AtStop&& at_stop) {
+RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_step, AtStop&& at_stop,
+                  Checkpoints* checkpoints = nullptr) {
+  check_reachable(sim, stops);
   RunCost cost;
   cost.begin(sim);
-  at_stop(sim, -1);
-  for (std::size_t k = 0; k < stops.size(); ++k) {
+  const bool resume = checkpoints && checkpoints->resuming();
+  const std::size_t first = resume ? checkpoints->restore(sim, cost) : 0;
+  if (!resume) at_stop(sim, -1);
+  for (std::size_t k = first; k < stops.size(); ++k) {
     while (!stops[k].reached(sim)) {
       const std::uint64_t steps_before = sim.steps();
       sim.step(stops[k].dt_limit(sim));
       after_step(sim);
       cost.count_steps(sim, steps_before);
+      if (checkpoints) checkpoints->after_step(sim, k, cost);
     }
     at_stop(sim, static_cast<int>(k));
   }
@@ -87,14 +107,21 @@ RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_st
 /// The snapshots of a run in `dir`: snap_00000.h5, snap_00001.h5, ... in the order written.
 class Snapshots {
  public:
-  explicit Snapshots(std::filesystem::path dir) : dir_(std::move(dir)) {}
+  /// `units`: the scene's unit system, in words, for the snapshots' `units` attribute.
+  explicit Snapshots(std::filesystem::path dir, std::string units = "dimensionless code units")
+      : dir_(std::move(dir)), units_(std::move(units)) {}
   template <class Sim>
   void write(const Sim& sim) {
-    io::write_snapshot(dir_ / io::snapshot_name(next_++), sim.particles(), sim.time(), sim.steps());
+    io::write_snapshot(dir_ / io::snapshot_name(next_++), sim, units_);
+  }
+  template <class Archive>
+  void checkpoint(Archive& ar) {
+    ar("snapshots_written", next_);
   }
 
  private:
   std::filesystem::path dir_;
+  std::string units_;
   std::size_t next_ = 0;
 };
 

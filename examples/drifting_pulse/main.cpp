@@ -51,6 +51,15 @@ std::optional<Options> parse_options(int argc, char** argv) {
   return opt;
 }
 
+/// One shift's figures, as summary.json reports them.
+struct PulseCase {
+  std::vector<double> widths;  ///< at each count reached so far
+  double mass_error = 0.0, kinetic = 0.0;
+  std::uint64_t regularizations = 0;
+};
+
+std::string shift_tag(double shift) { return fmt::format("{:g}", shift); }
+
 int run(Options opt) {
   auto& [base, common, shifts_text, counts_text] = opt;
   ex::apply_threads(common.threads);
@@ -70,43 +79,69 @@ int run(Options opt) {
   std::uint64_t steps = 0, updates = 0;
   double reg_seconds = 0.0;
   io::CsvWriter widths(dir / "widths.csv", {"shift", "regularizations", "width_mass"});
-  for (double shift : shifts) {
+  std::vector<PulseCase> results;  // one per shift begun
+  ex::Checkpoints checkpoints(common, dir, "rsph-drifting-pulse");
+  const auto part = checkpoints.add("program", [&](io::Archive& ar) {
+    widths.checkpoint(ar, "widths");
+    ar("steps", steps);
+    ar("updates", updates);
+    ar("regularization_seconds", reg_seconds);
+    ar.records("cases", results, [](io::Archive& a, PulseCase& c) {
+      a("widths", c.widths);
+      a("mass_error", c.mass_error);
+      a("kinetic_energy_dissipated", c.kinetic);
+      a("regularizations", c.regularizations);
+    });
+  });
+  std::size_t resumed_case = 0;  // on --resume, the shift the run had got to
+  checkpoints.read_ahead("program/cases/count", resumed_case);
+  for (std::size_t i = resumed_case > 0 ? resumed_case - 1 : 0; i < shifts.size(); ++i) {
     auto s = base;
-    s.shift = shift;
+    s.shift = shifts[i];
     ex::with_remap(s.remap, [&](auto order) {
       auto sim = scenes::make_drifting_pulse(s, order);
       const double m0 = sim.totals().mass;
-      const std::string tag = fmt::format("{:g}", shift);
-      const auto case_dir = dir / ("shift_" + tag);
+      const auto case_dir = dir / ("shift_" + shift_tag(shifts[i]));
       io::ensure_directory(case_dir);
-      io::Json width_json;
+      results.emplace_back();
       std::vector<ex::AfterRegularizations> stops;
       for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
       ex::Snapshots snapshots(case_dir);
-      const auto cost = ex::run_stops(sim, stops, ex::NoHook{}, [&](const auto& sm, int k) {
-        if (k < 0) return;
-        const int count = counts[static_cast<std::size_t>(k)];
-        const auto x = scenes::comoving_positions(sm, s.v_drift);
-        const auto& p = sm.particles();
-        io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
-        for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
-        csv.close();
-        snapshots.write(sm);
-        const double w = scenes::pulse_width_mass(sm, s);
-        width_json.set(std::to_string(count), w);
-        widths.row({shift, static_cast<double>(count), w});
-      });
-      const double mass_error = ex::relative_change(sim.totals().mass, m0);
-      io::Json c;
-      c.set("width_mass", width_json).set("mass_error", mass_error).set("regularizations", sim.regularizations());
-      c.set("kinetic_energy_dissipated", sim.kinetic_energy_removed());
-      cases.set(tag, c);
+      const auto case_part = checkpoints.add("case", [&](io::Archive& ar) { snapshots.checkpoint(ar); });
+      const auto cost = ex::run_stops(
+          sim, stops, ex::NoHook{},
+          [&](const auto& sm, int k) {
+            if (k < 0) return;
+            const int count = counts[static_cast<std::size_t>(k)];
+            const auto x = scenes::comoving_positions(sm, s.v_drift);
+            const auto& p = sm.particles();
+            io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
+            for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
+            csv.close();
+            snapshots.write(sm);
+            const double w = scenes::pulse_width_mass(sm, s);
+            results.back().widths.push_back(w);
+            widths.row({shifts[i], static_cast<double>(count), w});
+          },
+          &checkpoints);
+      auto& result = results.back();
+      result.mass_error = ex::relative_change(sim.totals().mass, m0);
+      result.regularizations = sim.regularizations();
+      result.kinetic = sim.kinetic_energy_removed();
       steps += cost.steps;
       updates += cost.updates;
       reg_seconds += cost.phases.regularization;
-      fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", tag, counts.back(),
-                 scenes::pulse_width_mass(sim, s), mass_error);
+      fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n",
+                 shift_tag(shifts[i]), counts.back(), scenes::pulse_width_mass(sim, s), result.mass_error);
     });
+  }
+  for (std::size_t i = 0; i < shifts.size(); ++i) {
+    io::Json width_json, c;
+    for (std::size_t k = 0; k < counts.size(); ++k) width_json.set(std::to_string(counts[k]), results[i].widths[k]);
+    c.set("width_mass", width_json).set("mass_error", results[i].mass_error);
+    c.set("regularizations", results[i].regularizations);
+    c.set("kinetic_energy_dissipated", results[i].kinetic);
+    cases.set(shift_tag(shifts[i]), c);
   }
   widths.close();
   const double wall = ex::seconds_since(wall0);

@@ -65,15 +65,17 @@ int run(Options opt) {
   };
   io::Json scheme;
   auto on_end = [&](const auto& sim) {
-    io::write_snapshot(dir / io::snapshot_name(1), sim.particles(), sim.time(), sim.steps());
+    io::write_snapshot(dir / io::snapshot_name(1), sim, "dimensionless code units");
     ex::write_scheme(scheme, sim);
   };
   {
     // the initial state, for the record
     const auto p0 = method == "rsph" ? scenes::kh_lattice(s, s.h_over_dx) : scenes::kh_equal_mass(s);
-    io::write_snapshot(dir / io::snapshot_name(0), p0, 0.0, 0);
+    io::write_snapshot(dir / io::snapshot_name(0), p0, 0.0, 0,
+                       io::describe_run(s.box(), eos::IdealGas{s.gamma}, "dimensionless code units"));
   }
-  const auto r = scenes::run_kelvin_helmholtz(method == "rsph", s, on_step, on_end);
+  ex::Checkpoints checkpoints(common, dir, "rsph-kelvin-helmholtz");
+  const auto r = scenes::run_kelvin_helmholtz(method == "rsph", s, on_step, on_end, &checkpoints);
   progress.finish();
   io::CsvWriter csv(dir / "amplitude.csv", {"time", "amplitude"});
   for (std::size_t i = 0; i < r.t.size(); ++i) csv.row({r.t[i], r.amplitude[i]});

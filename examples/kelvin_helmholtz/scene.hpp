@@ -164,8 +164,14 @@ inline double fitted_growth_rate(const std::vector<double>& t, const std::vector
 /// Runs a simulation of the scene to its end time (examples::run_stops), recording the mode amplitude and
 /// the momentum thickness after every step; on_step(sim) after each step, on_end(sim) at the end.
 template <class Sim, class OnStep, class OnEnd>
-KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end) {
+KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end,
+             examples::Checkpoints* checkpoints) {
   KhRun r;
+  const auto part = examples::add_part(checkpoints, "kelvin_helmholtz", [&](io::Archive& ar) {
+    ar("t", r.t);
+    ar("amplitude", r.amplitude);
+    ar("thickness", r.thickness);
+  });
   const double E0 = sim.totals().total_energy();
   auto record = [&](const auto& sm) {
     r.t.push_back(sm.time());
@@ -180,7 +186,7 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
         record(sm);
         on_step(sm);
       },
-      examples::NoHook{});
+      examples::NoHook{}, checkpoints);
   on_end(sim);
   r.amplitude_final = r.amplitude.back();
   if (s.chi > 1.0) r.folds = interface_folds(sim.particles(), s);
@@ -221,10 +227,12 @@ SphKh<Terms...> make_sph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
                          physics::GradH<2>{s.h_over_dx}, terms...);
 }
 
-/// Runs one of the variants: RSPH (with either remap) or SPH, with conductivity when alpha_u > 0.
+/// Runs one of the variants: RSPH (with either remap) or SPH, with conductivity when alpha_u > 0; with
+/// checkpoints, as they say.
 template <class OnStep, class OnEnd>
-KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end) {
-  auto run = [&](auto sim) { return run_kh(sim, s, on_step, on_end); };
+KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end,
+                           examples::Checkpoints* checkpoints = nullptr) {
+  auto run = [&](auto sim) { return run_kh(sim, s, on_step, on_end, checkpoints); };
   const physics::ArtificialConductivity conduct{s.alpha_u};
   if (rsph)
     return examples::with_remap(s.remap, [&](auto order) {

@@ -48,11 +48,13 @@ int main(int argc, char** argv) {
     };
     ex::Snapshots snapshots(dir);  // the initial and the final state
     auto at_stop = [&](const auto& sim, int) { snapshots.write(sim); };
+    ex::Checkpoints checkpoints(common, dir, "rsph-linear-wave");
+    const auto part = checkpoints.add("program", [&](io::Archive& ar) { snapshots.checkpoint(ar); });
     scenes::LinearWaveResult res;
     if (kernel_name == "quintic")
-      res = scenes::run_linear_wave<kernel::QuinticSpline>(s, on_step, at_stop);
+      res = scenes::run_linear_wave<kernel::QuinticSpline>(s, on_step, at_stop, &checkpoints);
     else if (kernel_name == "cubic")
-      res = scenes::run_linear_wave<kernel::CubicSpline>(s, on_step, at_stop);
+      res = scenes::run_linear_wave<kernel::CubicSpline>(s, on_step, at_stop, &checkpoints);
     else
       throw InputError("unknown kernel '" + kernel_name + "' (quintic, cubic)");
     progress.finish();

@@ -131,7 +131,8 @@ SphWave<Kernel> make_sph_wave(const LinearWaveParams& s) {
 /// step, and measures gamma (eq. 11), the phase error and the noise; on_step(sim) after each step,
 /// at_stop(sim, k) at the start (k = -1) and at the end (k = 0).
 template <class Kernel, class Sim, class OnStep, class AtStop>
-LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step, AtStop&& at_stop) {
+LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step, AtStop&& at_stop,
+                          examples::Checkpoints* checkpoints) {
   const Box<2> box = s.box();
   const Vec<2> sensor(0.5 * s.spacing(), 0.25);  // on a lattice column, mid-height
   // The reference density: the sensor on the unperturbed lattice (removes the lattice-sum bias).
@@ -143,6 +144,12 @@ LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step,
   };
   record(sim);
   bool early_noted = false;
+  const auto part = examples::add_part(checkpoints, "linear_wave", [&](io::Archive& ar) {
+    ar("t", res.t);
+    ar("delta_rho", res.delta_rho);
+    ar("noise_initial", res.noise_initial);
+    ar("early_noted", early_noted);
+  });
   static_cast<examples::RunCost&>(res) = examples::run_stops(
       sim, examples::at_times({s.periods * s.period()}),
       [&](const auto& sm) {
@@ -153,7 +160,7 @@ LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step,
         }
         on_step(sm);
       },
-      at_stop);
+      at_stop, checkpoints);
   res.noise_final = detail::transverse_noise(sim) / (s.amplitude * s.cs);
   res.gamma = analysis::damping_rate(res.t, res.delta_rho, s.period(), s.periods);
   res.phase_error = analysis::phase_error(res.t, res.delta_rho, s.period());
@@ -170,14 +177,15 @@ LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step,
 
 /// Runs RSPH when r > 0, else plain SPH.
 template <class Kernel, class OnStep, class AtStop = examples::NoHook>
-LinearWaveResult run_linear_wave(const LinearWaveParams& s, OnStep&& on_step, AtStop&& at_stop = {}) {
+LinearWaveResult run_linear_wave(const LinearWaveParams& s, OnStep&& on_step, AtStop&& at_stop = {},
+                                 examples::Checkpoints* checkpoints = nullptr) {
   if (s.r > 0.0)
     return examples::with_remap(s.remap, [&](auto order) {
       auto sim = make_rsph_wave<Kernel>(s, order);
-      return run_wave<Kernel>(sim, s, on_step, at_stop);
+      return run_wave<Kernel>(sim, s, on_step, at_stop, checkpoints);
     });
   auto sim = make_sph_wave<Kernel>(s);
-  return run_wave<Kernel>(sim, s, on_step, at_stop);
+  return run_wave<Kernel>(sim, s, on_step, at_stop, checkpoints);
 }
 
 }  // namespace rsph::scenes

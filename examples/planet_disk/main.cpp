@@ -84,7 +84,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   auto& [s, common, resolution, snapshot_every, map_nr, map_nphi] = opt;
   ex::po::options_description desc("rsph-planet-disk options");
   ex::Flags flag(desc, common);
-  ex::add_common_options(flag, common, "--particles 8000 --orbits 10 --snapshot-every 5");
+  ex::add_common_options(flag, common, "--particles 8000 --orbits 10 --snapshot-every 5", "orbits");
   flag("method", s.method, "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity");
   ex::add_remap_flag(flag, s.remap);
   flag("eos", s.eos, "isothermal (c_s / v_K fixed) or polytropic (eq. 21)");
@@ -157,12 +157,22 @@ int run(Options opt) {
                   static_cast<double>(d.steps), static_cast<double>(d.regularizations), d.wall_seconds});
     const bool last = d.orbit >= s.orbits * (1.0 - 1e-12);
     if (d.orbit >= next_snapshot * (1.0 - 1e-12) || last) {
-      io::write_snapshot(dir / io::snapshot_name(snapshots++), sim.particles(), sim.time(), sim.steps());
+      const Vec<2> star = s.star_planet().star_position(sim.time()),
+                   planet = s.star_planet().planet_position(sim.time());
+      io::write_snapshot(dir / io::snapshot_name(snapshots++), sim,
+                         "G = 1, M_* = 1, planet orbit radius a = 1 (an orbit takes 2 pi / sqrt(1 + M_p))",
+                         {{"star", {star.x(), star.y()}}, {"planet", {planet.x(), planet.y()}}});
       next_snapshot += snapshot_every;
     }
     if (last) write_maps(dir, sim.particles(), s, sim.time(), map_nr, map_nphi);
   };
-  const auto r = scenes::run_planet_disk(s, on_step, on_sample);
+  ex::Checkpoints checkpoints(common, dir, "rsph-planet-disk", period);
+  const auto part = checkpoints.add("program", [&](io::Archive& ar) {
+    timeline.checkpoint(ar, "timeline");
+    ar("snapshots", snapshots);
+    ar("next_snapshot", next_snapshot);
+  });
+  const auto r = scenes::run_planet_disk(s, on_step, on_sample, &checkpoints);
   progress.finish();
   timeline.close();
 

@@ -94,6 +94,11 @@ struct PlanetDiskParams {
 struct DiskSoundSpeed {
   double aspect = 0.05, GM = 1.0;
   double operator()(const Vec<2>& x) const { return aspect * std::sqrt(GM / x.norm()); }
+  template <class F>
+  void describe(F&& f) const {
+    f("cs_over_vK", aspect);
+    f("GM", GM);
+  }
 };
 
 /// Eq. (21): K(r) = c_s,0(r)^2 / (gamma Sigma_0^(gamma - 1)).
@@ -103,6 +108,11 @@ struct DiskPolytropicK {
   double operator()(const Vec<2>& x) const {
     const double c = cs(x);
     return c * c / (gamma * std::pow(sigma0, gamma - 1.0));
+  }
+  template <class F>
+  void describe(F&& f) const {
+    cs.describe(f);
+    f("sigma0", sigma0);
   }
 };
 
@@ -185,9 +195,30 @@ inline std::vector<examples::AtTime> disk_stops(const PlanetDiskParams& s) {
   }
 }
 
+/// The run's samples and running figures in a checkpoint (the rest follows from the parameters).
+inline void checkpoint_disk_run(io::Archive& ar, DiskRun& r) {
+  ar.records("samples", r.samples, [](io::Archive& a, DiskSample& d) {
+    a("orbit", d.orbit);
+    a("time", d.time);
+    a("mass", d.mass);
+    a("mass_removed", d.mass_removed);
+    a("gap_depth", d.gap_depth);
+    a("wall_seconds", d.wall_seconds);
+    a("particles", d.particles);
+    a("steps", d.steps);
+    a("regularizations", d.regularizations);
+  });
+  ar("mass_removed", r.mass_removed);
+  ar("particles_removed", r.particles_removed);
+  ar("max_mass_error", r.max_mass_error);
+  ar("output_seconds", r.output_seconds);
+}
+
 template <class Sim, class OnStep, class OnSample>
-DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample) {
+DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample,
+                 examples::Checkpoints* checkpoints) {
   DiskRun r;
+  const auto part = examples::add_part(checkpoints, "disk", [&](io::Archive& ar) { checkpoint_disk_run(ar, r); });
   r.mass_initial = sim.totals().mass;
   const double period = s.period();
   const auto t0 = std::chrono::steady_clock::now();
@@ -217,7 +248,7 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
     on_sample(sm, r.samples.back());
     r.output_seconds += elapsed() - t_sample;
   };
-  static_cast<examples::RunCost&>(r) = examples::run_stops(sim, disk_stops(s), after_step, sample);
+  static_cast<examples::RunCost&>(r) = examples::run_stops(sim, disk_stops(s), after_step, sample, checkpoints);
   r.mass_final = sim.totals().mass;
   if constexpr (requires { sim.regularizer().log(); })
     for (const auto& record : sim.regularizer().log()) r.remap_seconds += record.seconds;
@@ -289,12 +320,14 @@ auto on_lattice(const PlanetDiskParams& s, EOS eos, Run&& run) {
 }  // namespace detail
 
 /// Runs the disk; on_step(sim) after each step, on_sample(sim, sample) at the start and every
-/// measure_every orbits (the last at the end of the run).
+/// measure_every orbits (the last at the end of the run); with checkpoints, as they say (and on resume from
+/// the last one).
 template <class OnStep, class OnSample>
-DiskRun run_planet_disk(const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample) {
+DiskRun run_planet_disk(const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample,
+                        examples::Checkpoints* checkpoints = nullptr) {
   s.validate();
   const DiskSoundSpeed cs{s.aspect, 1.0};
-  auto run = [&](auto& sim) { return detail::run_disk(sim, s, on_step, on_sample); };
+  auto run = [&](auto& sim) { return detail::run_disk(sim, s, on_step, on_sample, checkpoints); };
   if (s.eos == "polytropic")
     return detail::on_lattice(s, eos::Polytropic<DiskPolytropicK>(s.gamma, DiskPolytropicK{cs, s.gamma, s.sigma0}),
                               run);

@@ -36,13 +36,18 @@ int run(const Options& opt, Sim sim) {
   log.record(sim.time(), sim.steps(), start);
   ex::Snapshots snapshots(dir);
   io::Progress progress(fmt::format("rsph-sod {}D {}", D, opt.method), opt.sod.t_end);
+  ex::Checkpoints checkpoints(opt.common, dir, "rsph-sod");
+  const auto part = checkpoints.add("program", [&](io::Archive& ar) {
+    log.checkpoint(ar);
+    snapshots.checkpoint(ar);
+  });
   const auto cost = ex::run_stops(
       sim, ex::evenly(opt.sod.t_end, opt.snapshots),
       [&](const auto& s) {
         log.record(s.time(), s.steps(), s.totals());
         if (!opt.common.quiet) progress.update(s.time(), s.steps());
       },
-      [&](const auto& s, int) { snapshots.write(s); });
+      [&](const auto& s, int) { snapshots.write(s); }, &checkpoints);
   progress.finish();
   log.close();
 

@@ -81,19 +81,21 @@ int run(Options opt) {
   };
   io::Json scheme;
   auto on_end = [&](const auto& sim) {
-    io::write_snapshot(dir / io::snapshot_name(0), sim.particles(), sim.time(), sim.steps());
+    io::write_snapshot(dir / io::snapshot_name(0), sim, "dimensionless code units");
     ex::write_scheme(scheme, sim);
   };
+  ex::Checkpoints checkpoints(common, dir, "rsph-strong-shock");
   scenes::ShockRun r;
   if (method == "rsph" && s.refinement.levels > 0)
     r = ex::with_remap(s.remap, [&](auto order) {
-      return scenes::run_shock(scenes::make_rsph_levels_shock(s, order), s, on_step, on_end);
+      return scenes::run_shock(scenes::make_rsph_levels_shock(s, order), s, on_step, on_end, &checkpoints);
     });
   else if (method == "rsph")
-    r = ex::with_remap(
-        s.remap, [&](auto order) { return scenes::run_shock(scenes::make_rsph_shock(s, order), s, on_step, on_end); });
+    r = ex::with_remap(s.remap, [&](auto order) {
+      return scenes::run_shock(scenes::make_rsph_shock(s, order), s, on_step, on_end, &checkpoints);
+    });
   else  // sph (parse_options refused the rest)
-    r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end);
+    r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end, &checkpoints);
   progress.finish();
 
   io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});

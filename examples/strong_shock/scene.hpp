@@ -216,11 +216,12 @@ inline SphShock make_sph_shock(const StrongShockParams& s) {
 /// Runs any of the simulations to t_end (examples::run_stops); on_step(sim) after each step, on_end(sim) once
 /// at the end.
 template <class Sim, class OnStep, class OnEnd>
-ShockRun run_shock(Sim sim, const StrongShockParams& s, OnStep&& on_step, OnEnd&& on_end) {
+ShockRun run_shock(Sim sim, const StrongShockParams& s, OnStep&& on_step, OnEnd&& on_end,
+                   examples::Checkpoints* checkpoints = nullptr) {
   const double E0 = sim.totals().total_energy();
   ShockRun r;
   static_cast<examples::RunCost&>(r) =
-      examples::run_stops(sim, examples::at_times({s.t_end}), on_step, examples::NoHook{});
+      examples::run_stops(sim, examples::at_times({s.t_end}), on_step, examples::NoHook{}, checkpoints);
   on_end(sim);
   detail::measure(sim, s, r);
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;

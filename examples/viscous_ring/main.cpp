@@ -79,10 +79,12 @@ int run(Options opt) {
       conservation.record(sim.time(), sim.steps(), sim.totals());
   };
   auto on_snapshot = [&](const auto& sim, int k) {
-    io::write_snapshot(dir / io::snapshot_name(k + 1), sim.particles(), sim.time(), sim.steps());
+    io::write_snapshot(dir / io::snapshot_name(k + 1), sim, "G M_* = 1, ring radius R_0 = 1", {{"star", {0.0, 0.0}}});
     if (k < 0) conservation.record(sim.time(), sim.steps(), sim.totals());
   };
-  const auto r = scenes::run_viscous_ring(s, on_step, on_snapshot);
+  ex::Checkpoints checkpoints(common, dir, "rsph-viscous-ring");
+  const auto part = checkpoints.add("program", [&](io::Archive& ar) { conservation.checkpoint(ar); });
+  const auto r = scenes::run_viscous_ring(s, on_step, on_snapshot, &checkpoints);
   progress.finish();
   conservation.close();
 

@@ -174,9 +174,31 @@ struct RingRun : examples::RunCost {
 
 namespace detail {
 
+/// The run's snapshots and running figures in a checkpoint (the rest follows from the parameters).
+inline void checkpoint_ring_run(io::Archive& ar, RingRun& r) {
+  ar.records("snapshots", r.snapshots, [](io::Archive& a, RingSnapshot& snap) {
+    a("tau", snap.tau);
+    a("time", snap.time);
+    a("tau_fit", snap.tau_fit);
+    a("nu_eff", snap.nu_eff);
+    a("noise", snap.noise);
+    a("mass", snap.mass);
+    a("particles", snap.particles);
+    a("profile_x", snap.profile.x);
+    a("profile_mean", snap.profile.mean);
+    a("profile_min", snap.profile.min);
+    a("profile_max", snap.profile.max);
+  });
+  ar("mass_accreted", r.mass_accreted);
+  ar("particles_accreted", r.particles_accreted);
+  ar("max_mass_error", r.max_mass_error);
+}
+
 template <class Sim, class OnStep, class OnSnapshot>
-RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
+RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot,
+                 examples::Checkpoints* checkpoints) {
   RingRun r;
+  const auto part = examples::add_part(checkpoints, "ring", [&](io::Archive& ar) { checkpoint_ring_run(ar, r); });
   r.mass_initial = sim.totals().mass;
   std::vector<double> times;
   for (const double tau : s.taus) times.push_back(s.time_of(tau));
@@ -198,7 +220,8 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
     }
     on_snapshot(sm, k);
   };
-  static_cast<examples::RunCost&>(r) = examples::run_stops(sim, examples::at_times(times), after_step, at_snapshot);
+  static_cast<examples::RunCost&>(r) =
+      examples::run_stops(sim, examples::at_times(times), after_step, at_snapshot, checkpoints);
   r.mass_final = sim.totals().mass;
   double sum = 0.0, noise = 0.0;
   r.nu_eff_min = std::numeric_limits<double>::infinity();
@@ -271,11 +294,11 @@ SphRing<Viscosity> make_sph_ring(const ViscousRingParams& s, const Lattice& lat)
 
 namespace detail {
 template <class Lattice, class OnStep, class OnSnapshot>
-RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnStep&& on_step,
-                            OnSnapshot&& on_snapshot) {
+RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnStep&& on_step, OnSnapshot&& on_snapshot,
+                            examples::Checkpoints* checkpoints) {
   using MG = physics::ShearViscosityMG<RingKernel, 2>;
   using NS = physics::NavierStokesViscosity<2>;
-  auto run = [&](auto sim) { return run_ring(sim, s, on_step, on_snapshot); };
+  auto run = [&](auto sim) { return run_ring(sim, s, on_step, on_snapshot, checkpoints); };
   if (s.cycle == 0) return s.viscosity == "ns" ? run(make_sph_ring<NS>(s, lat)) : run(make_sph_ring<MG>(s, lat));
   return examples::with_remap(s.remap, [&](auto order) {
     return s.viscosity == "ns" ? run(make_rsph_ring<NS>(s, lat, order)) : run(make_rsph_ring<MG>(s, lat, order));
@@ -284,13 +307,14 @@ RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnSt
 }  // namespace detail
 
 /// Runs the ring with the scene's regularization cycle, lattice and viscosity. on_step(sim) after each
-/// step; on_snapshot(sim, k) at the start (k = -1) and at each snapshot k.
+/// step; on_snapshot(sim, k) at the start (k = -1) and at each snapshot k; with checkpoints, as they say.
 template <class OnStep, class OnSnapshot>
-RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot) {
+RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot,
+                         examples::Checkpoints* checkpoints = nullptr) {
   s.validate();
   if (s.lattice == "hexagonal")
-    return detail::run_viscous_ring_on(s, lattice::Hexagonal{s.spacing()}, on_step, on_snapshot);
-  return detail::run_viscous_ring_on(s, lattice::Square{s.spacing()}, on_step, on_snapshot);
+    return detail::run_viscous_ring_on(s, lattice::Hexagonal{s.spacing()}, on_step, on_snapshot, checkpoints);
+  return detail::run_viscous_ring_on(s, lattice::Square{s.spacing()}, on_step, on_snapshot, checkpoints);
 }
 
 }  // namespace rsph::scenes

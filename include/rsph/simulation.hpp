@@ -97,6 +97,7 @@ class Simulation {
         params_(params),
         terms_(std::move(terms)...) {
     validate();
+    if (p_.id.size() != p_.n_real) p_.renumber();  // a set written field by field (a remap at set-up)
     boundary::mark_zone_members<D>(terms_, p_);
     compute_rates();
   }
@@ -151,6 +152,7 @@ class Simulation {
     const auto t0 = clock::now();
     p_.clear_ghosts();
     kinetic_removed_ += reg_.remap(p_, box_, step_info());
+    p_.renumber();                         // every particle is new
     if constexpr (corrected) cg_.reset();  // new particles: solve afresh
     boundary::mark_zone_members<D>(terms_, p_);
     ++regularizations_;
@@ -349,7 +351,7 @@ class Simulation {
     auto t0 = clock::now();
     const auto& active = blocks_.active();
     build_cells(1.0, false);
-    row_.assign(p_.size(), -1);
+    row_.assign(p_.size_with_ghosts(), -1);
     for (std::size_t i = 0; i < active.size(); ++i) row_[active[i]] = static_cast<std::int32_t>(i);
     const neighbors::Subset rows{&active, &row_};
     neighbors::build_neighbor_list<D>(p_.x, p_.h, rows, neighbors::MeanH{Kernel::support}, cells_, nl_);
@@ -397,7 +399,7 @@ class Simulation {
   void update_pressure() {
     physics::loops::update_pressure<D>(eos_, p_, P_over_rho2_);
     if constexpr (grad_h)
-      for (std::size_t g = p_.n_real; g < p_.size(); ++g)
+      for (std::size_t g = p_.n_real; g < p_.size_with_ghosts(); ++g)
         gradh_.Omega[g] = gradh_.Omega[p_.ghost_source[g - p_.n_real]];
   }
 

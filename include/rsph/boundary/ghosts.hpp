@@ -19,7 +19,7 @@ void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
   for (int k = 0; k < D; ++k) {
     if (box.edge[k] == Edge::open) continue;
     const double lo = box.lo[k], hi = box.hi[k], L = hi - lo;
-    const std::size_t n = p.size();
+    const std::size_t n = p.size_with_ghosts();
     if (box.edge[k] == Edge::periodic) {
       // a layer wider than the box needs images from several periods
       const int reach = static_cast<int>(std::ceil(width / L));
@@ -53,7 +53,7 @@ void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
 template <int D, bool E>
 void refresh_ghosts(ParticleSet<D, E>& p) {
   const std::size_t n_real = p.n_real;
-  for (std::size_t g = n_real; g < p.size(); ++g) {
+  for (std::size_t g = n_real; g < p.size_with_ghosts(); ++g) {
     const std::size_t s = p.ghost_source[g - n_real];
     p.rho[g] = p.rho[s];
     p.P[g] = p.P[s];

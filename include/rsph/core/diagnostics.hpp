@@ -54,7 +54,7 @@ std::pair<std::size_t, std::string> first_unphysical(const ParticleSet<D, E>& p)
 template <int D, bool E>
 void validate_initial_particles(const ParticleSet<D, E>& p, const Box<D>& box, bool need_rho) {
   require(p.n_real > 0, "the domain holds no particles");
-  require(p.n_real == p.size(), "initial particle sets must not contain ghosts");
+  require(p.n_real == p.size_with_ghosts(), "initial particle sets must not contain ghosts");
   for (int k = 0; k < D; ++k)
     require(box.hi[k] > box.lo[k], "the box is empty along axis " + std::to_string(k) + " (hi <= lo)");
   for (std::size_t a = 0; a < p.n_real; ++a) {

@@ -33,10 +33,15 @@ struct ParticleSet {
   EnergyField du_dt;
   std::vector<std::uint8_t> frozen;         ///< 1: motion prescribed, not integrated
   std::vector<std::uint32_t> ghost_source;  ///< for ghost g (index n_real + g): its real particle
+  /// Each real particle's identity: kept through its life (steps, removals), never reused; a remap makes every
+  /// particle anew, and the simulation numbers the new ones on from next_id.
+  std::vector<std::uint64_t> id;
+  std::uint64_t next_id = 0;
   std::size_t n_real = 0;
 
-  std::size_t size() const { return x.size(); }
-  std::size_t n_ghost() const { return size() - n_real; }
+  /// Every point, real particles and ghosts; n_real counts the real ones.
+  std::size_t size_with_ghosts() const { return x.size(); }
+  std::size_t n_ghost() const { return size_with_ghosts() - n_real; }
 
   /// Appends one real particle; only valid while there are no ghosts.
   void add(double mass, const Vec<D>& pos, const Vec<D>& vel, double smoothing, double energy = 0.0) {
@@ -53,7 +58,14 @@ struct ParticleSet {
       du_dt.push_back(0.0);
     }
     frozen.push_back(0);
+    id.push_back(next_id++);
     n_real = x.size();
+  }
+
+  /// New identities for every real particle (after a remap made them anew).
+  void renumber() {
+    id.resize(n_real);
+    for (auto& i : id) i = next_id++;
   }
 
   /// Saves or restores (ar.saving()) the real particles through a checkpoint archive (io/checkpoint.hpp):
@@ -81,12 +93,15 @@ struct ParticleSet {
       ar("du_dt", p.du_dt);
     }
     ar("frozen", p.frozen);
+    ar("id", p.id);
+    ar("next_id", p.next_id);
     if (ar.saving()) return;
     n_real = x.size();
     ghost_source.clear();
     const auto n = n_real;
     if (m.size() != n || h.size() != n || rho.size() != n || P.size() != n || cs.size() != n || v.size() != n ||
-        dv_dt.size() != n || u.size() != (HasEnergy ? n : 0) || du_dt.size() != u.size() || frozen.size() != n)
+        dv_dt.size() != n || u.size() != (HasEnergy ? n : 0) || du_dt.size() != u.size() || frozen.size() != n ||
+        id.size() != n)
       throw InputError("checkpoint: the particle fields differ in length");
   }
 
@@ -128,6 +143,7 @@ struct ParticleSet {
     u.resize(n);
     du_dt.resize(n);
     frozen.resize(n);
+    id.resize(std::min(n, n_real));  // real particles only: ghosts have none
   }
 
   /// Zeroes, over [from, to), every field but the state m, x, v, h, rho and u: pressure, sound speed, rates
@@ -163,6 +179,7 @@ struct ParticleSet {
           du_dt[kept] = du_dt[a];
         }
         frozen[kept] = frozen[a];
+        id[kept] = id[a];
       }
       ++kept;
     }

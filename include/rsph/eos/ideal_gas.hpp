@@ -11,6 +11,12 @@ namespace rsph::eos {
 struct IdealGas {
   static constexpr bool has_internal_energy = true;
   double gamma = 1.4;
+  static constexpr const char* name = "ideal gas: P = (gamma - 1) rho u";
+  /// Its constants, f(name, value) each, for snapshots.
+  template <class F>
+  void describe(F&& f) const {
+    f("gamma", gamma);
+  }
 
   void validate() const { require(gamma > 1.0, "ideal gas: gamma must exceed 1 (got " + std::to_string(gamma) + ")"); }
   template <class X>

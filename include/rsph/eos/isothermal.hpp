@@ -12,6 +12,11 @@ namespace rsph::eos {
 struct Isothermal {
   static constexpr bool has_internal_energy = false;
   double cs = 1.0;
+  static constexpr const char* name = "isothermal: P = cs^2 rho";
+  template <class F>
+  void describe(F&& f) const {
+    f("cs", cs);
+  }
 
   void validate() const {
     require(cs > 0.0, "isothermal gas: sound speed must be positive (got " + std::to_string(cs) + ")");
@@ -31,6 +36,11 @@ template <class SoundSpeedOfPosition>
 struct LocallyIsothermal {
   static constexpr bool has_internal_energy = false;
   SoundSpeedOfPosition cs_of_x;
+  static constexpr const char* name = "locally isothermal: P = cs(x)^2 rho";
+  template <class F>
+  void describe(F&& f) const {
+    if constexpr (requires { cs_of_x.describe(f); }) cs_of_x.describe(f);
+  }
 
   explicit LocallyIsothermal(SoundSpeedOfPosition f) : cs_of_x(std::move(f)) {}
   template <class X>
@@ -53,6 +63,9 @@ struct LocallyIsothermal {
 struct Pressureless {
   static constexpr bool has_internal_energy = false;
   static constexpr bool exerts_pressure = false;
+  static constexpr const char* name = "pressureless: P = 0";
+  template <class F>
+  void describe(F&&) const {}
   template <class X>
   double pressure(double, double, const X&) const {
     return 0.0;

@@ -14,6 +14,12 @@ struct Polytropic {
   static constexpr bool has_internal_energy = false;
   double gamma;
   KOfPosition K_of_x;
+  static constexpr const char* name = "polytropic: P = K(x) rho^gamma";
+  template <class F>
+  void describe(F&& f) const {
+    f("gamma", gamma);
+    if constexpr (requires { K_of_x.describe(f); }) K_of_x.describe(f);
+  }
 
   Polytropic(double gamma_, KOfPosition K) : gamma(gamma_), K_of_x(std::move(K)) {}
   void validate() const {
@@ -32,6 +38,10 @@ struct Polytropic {
 /// K constant in space.
 struct ConstantK {
   double K = 1.0;
+  template <class F>
+  void describe(F&& f) const {
+    f("K", K);
+  }
   template <class X>
   double operator()(const X&) const {
     return K;

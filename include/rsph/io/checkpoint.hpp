@@ -20,6 +20,24 @@
 
 namespace rsph::io {
 
+namespace detail {
+/// HDF5's own error printing off while it lives: the archive reports failures itself, naming the field.
+class QuietHdf5 {
+ public:
+  QuietHdf5() {
+    H5Eget_auto2(H5E_DEFAULT, &function_, &data_);
+    H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  }
+  ~QuietHdf5() { H5Eset_auto2(H5E_DEFAULT, function_, data_); }
+  QuietHdf5(const QuietHdf5&) = delete;
+  QuietHdf5& operator=(const QuietHdf5&) = delete;
+
+ private:
+  H5E_auto2_t function_ = nullptr;
+  void* data_ = nullptr;
+};
+}  // namespace detail
+
 /// Saves fields into memory and then to a file, or restores them from a file, with one interface.
 class Archive {
  public:
@@ -30,6 +48,7 @@ class Archive {
     Archive ar;
     ar.saving_ = false;
     ar.path_ = path;
+    const detail::QuietHdf5 quiet;
     if (!std::filesystem::is_regular_file(path)) throw InputError("no checkpoint '" + path.string() + "'");
     ar.file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
     if (ar.file_ < 0) throw InputError("cannot read the checkpoint '" + path.string() + "'");
@@ -79,9 +98,7 @@ class Archive {
       integers(key, one);
       value = static_cast<T>(one.at(0));
     } else if constexpr (std::is_same_v<T, std::string>) {
-      std::vector<std::int64_t> chars(value.begin(), value.end());
-      integers(key, chars);
-      value.assign(chars.begin(), chars.end());
+      bytes(key, value);
     } else if constexpr (std::is_same_v<T, std::vector<double>>) {
       doubles(key, value);
     } else if constexpr (std::is_integral_v<typename T::value_type>) {
@@ -102,8 +119,22 @@ class Archive {
     }
   }
 
+  /// Saves or restores a list, each element's fields (fields(ar, element)) under name/0/, name/1/, ...
+  template <class T, class Fields>
+  void records(const std::string& name, std::vector<T>& list, Fields&& fields) {
+    const auto outer = scope(name);
+    std::size_t n = list.size();
+    (*this)("count", n);
+    list.resize(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto inner = scope(std::to_string(k));
+      fields(*this, list[k]);
+    }
+  }
+
   /// Writes the collected fields to `path`, atomically.
   void write(const std::filesystem::path& path) const {
+    const detail::QuietHdf5 quiet;
     const auto tmp = temporary_sibling(path);
     const hid_t file = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     if (file < 0) throw std::runtime_error("cannot create the checkpoint " + tmp.string());
@@ -111,15 +142,16 @@ class Archive {
     H5Pset_create_intermediate_group(groups, 1);
     bool ok = true;
     for (const auto& [key, f] : fields_) {
-      const bool real = f.kind == 'd';
-      hsize_t n = real ? f.d.size() : f.i.size();
+      const bool real = f.kind == 'd', text = f.kind == 'b';
+      hsize_t n = real ? f.d.size() : text ? f.b.size() : f.i.size();
+      const hid_t file_type = real ? H5T_IEEE_F64LE : text ? H5T_STD_U8LE : H5T_STD_I64LE;
+      const hid_t mem_type = real ? H5T_NATIVE_DOUBLE : text ? H5T_NATIVE_UCHAR : H5T_NATIVE_INT64;
+      const void* data = real   ? static_cast<const void*>(f.d.data())
+                         : text ? static_cast<const void*>(f.b.data())
+                                : static_cast<const void*>(f.i.data());
       const hid_t space = H5Screate_simple(1, &n, nullptr);
-      const hid_t set =
-          H5Dcreate2(file, key.c_str(), real ? H5T_IEEE_F64LE : H5T_STD_I64LE, space, groups, H5P_DEFAULT, H5P_DEFAULT);
-      const void* data = real ? static_cast<const void*>(f.d.data()) : static_cast<const void*>(f.i.data());
-      ok = ok && set >= 0 &&
-           (n == 0 ||
-            H5Dwrite(set, real ? H5T_NATIVE_DOUBLE : H5T_NATIVE_INT64, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0);
+      const hid_t set = H5Dcreate2(file, key.c_str(), file_type, space, groups, H5P_DEFAULT, H5P_DEFAULT);
+      ok = ok && set >= 0 && (n == 0 || H5Dwrite(set, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0);
       if (set >= 0) H5Dclose(set);
       H5Sclose(space);
     }
@@ -137,24 +169,35 @@ class Archive {
     char kind = 'd';
     std::vector<double> d;
     std::vector<std::int64_t> i;
+    std::string b;
   };
   Archive() = default;
 
   void doubles(const std::string& key, std::vector<double>& v) {
     if (saving_)
-      fields_[key] = Field{'d', v, {}};
+      fields_[key] = Field{'d', v, {}, {}};
     else
       read(key, H5T_NATIVE_DOUBLE, H5T_FLOAT, v);
   }
   void integers(const std::string& key, std::vector<std::int64_t>& v) {
     if (saving_)
-      fields_[key] = Field{'i', {}, v};
+      fields_[key] = Field{'i', {}, v, {}};
     else
       read(key, H5T_NATIVE_INT64, H5T_INTEGER, v);
+  }
+  void bytes(const std::string& key, std::string& text) {
+    if (saving_) {
+      fields_[key] = Field{'b', {}, {}, text};
+      return;
+    }
+    std::vector<unsigned char> raw;
+    read(key, H5T_NATIVE_UCHAR, H5T_INTEGER, raw);
+    text.assign(raw.begin(), raw.end());
   }
   template <class T>
   void read(const std::string& key, hid_t mem_type, H5T_class_t kind, std::vector<T>& v) const {
     const std::string where = "checkpoint '" + path_.string() + "': ";
+    const detail::QuietHdf5 quiet;
     bool present = true;  // each group on the path first: H5Lexists fails where a parent is missing
     for (auto slash = key.find('/'); present && slash != std::string::npos; slash = key.find('/', slash + 1))
       present = H5Lexists(file_, key.substr(0, slash).c_str(), H5P_DEFAULT) > 0;

@@ -40,6 +40,24 @@ class CsvWriter {
     std::fputc('\n', file_);
   }
 
+  /// Saves or restores, through a checkpoint archive (checkpoint.hpp), the rows written so far: a resumed run
+  /// goes on from the same text.
+  template <class Archive>
+  void checkpoint(Archive& ar, const std::string& name) {
+    if (!file_) throw std::logic_error("CSV " + target_.string() + " is closed");
+    std::string text;
+    if (ar.saving()) {
+      std::fflush(file_);
+      text = read_text_file(tmp_);
+    }
+    ar(name, text);
+    if (ar.saving()) return;
+    std::fclose(file_);
+    file_ = std::fopen(tmp_.c_str(), "w");
+    if (!file_ || std::fwrite(text.data(), 1, text.size(), file_) != text.size())
+      throw std::runtime_error("cannot write " + tmp_.string());
+  }
+
   /// Finishes the file and moves it to its final name.
   void close() {
     if (!file_) return;

@@ -5,6 +5,7 @@
 #include <unistd.h>
 #include <chrono>
 #include <cstdio>
+#include <optional>
 #include <string>
 
 namespace rsph::io {
@@ -16,12 +17,14 @@ class Progress {
 
   void update(double t, std::uint64_t step) {
     if (!enabled_) return;
+    if (!t_first_) t_first_ = t;  // a resumed run starts part of the way: its ETA counts from there
     const auto now = clock::now();
     if (now - last_ < std::chrono::milliseconds(250)) return;
     last_ = now;
     const double elapsed = std::chrono::duration<double>(now - start_).count();
     const double frac = t_end_ > 0 ? std::min(1.0, t / t_end_) : 1.0;
-    const double eta = frac > 0 ? elapsed * (1.0 - frac) / frac : 0.0;
+    const double done = t - *t_first_, left = t_end_ - t;
+    const double eta = done > 0 && left > 0 ? elapsed * left / done : 0.0;
     fmt::print(stderr, "\r{} {:5.1f}%  t={:.4g}  step {}  elapsed {}  ETA {}   ", label_, 100.0 * frac, t, step,
                clock_text(elapsed), clock_text(eta));
     std::fflush(stderr);
@@ -49,6 +52,7 @@ class Progress {
   clock::time_point start_, last_;
   bool enabled_;
   bool shown_ = false;
+  std::optional<double> t_first_;  ///< the time of the first update
 };
 
 }  // namespace rsph::io

@@ -55,7 +55,7 @@ class ConsistentGradientWorkspace {
       find_band(term, p, nl);
       std::vector<Vec<D>> psi_old;
       if (!fresh) psi_old.assign(psi.begin(), psi.begin() + static_cast<std::ptrdiff_t>(n));
-      psi.assign(p.size(), Vec<D>::Zero());
+      psi.assign(p.size_with_ghosts(), Vec<D>::Zero());
       last = CgResult{};
       last.converged = true;
       if (!members_.empty()) {
@@ -83,7 +83,7 @@ class ConsistentGradientWorkspace {
   template <class P>
   void find_band(const ConsistentGradient& term, const P& p, const neighbors::NeighborList& nl) {
     const std::size_t n = p.n_real;
-    band.assign(p.size(), 0);
+    band.assign(p.size_with_ghosts(), 0);
     for (std::size_t a = 0; a < n; ++a)
       for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k)
         if (std::abs(p.h[nl.index[k]] - p.h[a]) > 1e-12 * p.h[a]) {
@@ -115,7 +115,7 @@ class ConsistentGradientWorkspace {
   /// right-hand sides V_a E_a per axis.
   template <class Kernel, class P>
   void pair_weights_and_rhs(const P& p, const Box<D>& box, const neighbors::NeighborList& nl) {
-    const std::size_t n = p.n_real, n_all = p.size(), m = members_.size();
+    const std::size_t n = p.n_real, n_all = p.size_with_ghosts(), m = members_.size();
     V_.resize(n_all);
     for (std::size_t a = 0; a < n_all; ++a) V_[a] = p.m[a] / p.rho[a];
     ghost_flips_.resize(n_all - n);
@@ -245,7 +245,7 @@ class ConsistentGradientWorkspace {
   /// Ghosts take their source's psi (its mirrored components flipped) and band membership.
   template <class P>
   void mirror_onto_ghosts(const P& p, const Box<D>& box) {
-    const std::size_t n = p.n_real, n_all = p.size();
+    const std::size_t n = p.n_real, n_all = p.size_with_ghosts();
     psi.resize(n_all);
     band.resize(n_all);
     for (std::size_t g = n; g < n_all; ++g) {

@@ -66,7 +66,7 @@ template <class Kernel, int D, class Solver, class P>
 bool solve_density_and_h(const Solver& solver, P& p, const neighbors::NeighborList& nl, double margin,
                          GradHWorkspace& ws) {
   const std::size_t n = p.n_real;
-  ws.Omega.assign(p.size(), 1.0);
+  ws.Omega.assign(p.size_with_ghosts(), 1.0);
   bool fits = true;
 #pragma omp parallel reduction(&& : fits)
   {

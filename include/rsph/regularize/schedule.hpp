@@ -104,9 +104,9 @@ struct Adaptive {
     }
     // m_b / rho_b N_b of every point, ghosts taking their source's N
     auto& volume_N = volume_N_;
-    volume_N.resize(p.size());
+    volume_N.resize(p.size_with_ghosts());
 #pragma omp parallel for schedule(static)
-    for (std::size_t b = 0; b < p.size(); ++b)
+    for (std::size_t b = 0; b < p.size_with_ghosts(); ++b)
       volume_N[b] = p.m[b] / p.rho[b] * N[b < p.n_real ? b : p.ghost_source[b - p.n_real]];
     // Which condition particle a violates (0: none).
     auto reason = [&](std::size_t a) {

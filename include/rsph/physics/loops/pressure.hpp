@@ -20,7 +20,7 @@ void update_pressure(const EOS& eos, ParticleSet<D, E>& p, std::vector<double>& 
   }
   boundary::refresh_ghosts(p);
   if constexpr (exerts_pressure<EOS>()) {  // the pair loops read it only for a gas that pushes
-    const std::size_t n_all = p.size();
+    const std::size_t n_all = p.size_with_ghosts();
     P_over_rho2.resize(n_all);
 #pragma omp parallel for schedule(static)
     for (std::size_t a = 0; a < n_all; ++a) P_over_rho2[a] = p.P[a] / (p.rho[a] * p.rho[a]);

@@ -31,7 +31,7 @@ void stress_over_rho2(const P& p, const Box<S::dim>& box, const neighbors::Neigh
                       std::vector<Mat<S::dim>>& S_over_rho2) {
   constexpr int D = S::dim;
   const std::size_t n = p.n_real;
-  S_over_rho2.resize(p.size());
+  S_over_rho2.resize(p.size_with_ghosts());
 #pragma omp parallel for schedule(static)
   for (std::size_t a = 0; a < n; ++a) {
     Mat<D> G = Mat<D>::Zero();
@@ -49,7 +49,7 @@ void stress_over_rho2(const P& p, const Box<S::dim>& box, const neighbors::Neigh
     const double rho = p.rho[a];
     S_over_rho2[a] = term.stress(G, rho) / (rho * rho);
   }
-  for (std::size_t g = n; g < p.size(); ++g) {
+  for (std::size_t g = n; g < p.size_with_ghosts(); ++g) {
     const Vec<D> sign = boundary::mirror_signs<D>(boundary::mirror_flips(p, box, g));
     S_over_rho2[g] = sign.asDiagonal() * S_over_rho2[p.ghost_source[g - n]] * sign.asDiagonal();
   }

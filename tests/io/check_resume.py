@@ -1,0 +1,162 @@
+#!/usr/bin/python3
+"""A run stopped and resumed equals the run left alone, to the bit.
+
+    check_resume.py OUT PROGRAM [FLAGS...] --every X [--wall MINUTES]
+
+Runs PROGRAM FLAGS four ways into OUT/whole, OUT/wall, OUT/signal and OUT/killed: left alone (with
+checkpoints every X); stopped by --max-wall MINUTES (0.005 unless given) again and again and resumed each time
+until it finishes; stopped by SIGINT once its first checkpoint is written, then resumed; and killed by SIGKILL
+then, which runs no handler and may leave a half-written file, then resumed. Each stop must exit 5 naming its checkpoint and leave
+no .partial file; each finished run must have every snapshot dataset and attribute, every CSV column but
+wall times and every summary.json figure but wall times equal to the run left alone."""
+import glob
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
+from rsph_plot import load  # noqa: E402
+
+WALL = ("seconds", "per_second", "command_line", "checkpoint-every", "max-wall")
+
+
+def fail(message):
+    sys.exit("check_resume: " + message)
+
+
+def run(cmd, expect):
+    p = subprocess.run(cmd, capture_output=True, text=True)
+    if p.returncode not in expect:
+        fail(f"{' '.join(cmd)} exited {p.returncode}: {p.stderr.strip()}")
+    return p
+
+
+def no_partial(folder):
+    left = glob.glob(os.path.join(folder, ".*.partial"))
+    if left:
+        fail(f"partial files left in {folder}: {left}")
+
+
+def stopped_message(p, folder):
+    if p.returncode == 5 and f"--resume {folder}" not in p.stderr:
+        fail(f"a stop did not say how to resume: {p.stderr.strip()}")
+
+
+def figures(value, path=""):
+    """summary.json flattened, wall-clock figures left out."""
+    if isinstance(value, dict):
+        out = {}
+        for k, v in value.items():
+            if not any(w in k for w in WALL):
+                out.update(figures(v, f"{path}/{k}"))
+        return out
+    if isinstance(value, list):
+        out = {}
+        for i, v in enumerate(value):
+            out.update(figures(v, f"{path}/{i}"))
+        return out
+    return {path: value}
+
+
+def csv_columns(path):
+    with open(path) as f:
+        header = f.readline().strip().split(",")
+        rows = [line.strip().split(",") for line in f]
+    return {h: [r[i] for r in rows] for i, h in enumerate(header) if not any(w in h for w in WALL)}
+
+
+def compare(a, b):
+    names = lambda d, pattern: sorted(os.path.relpath(p, d) for p in glob.glob(os.path.join(d, "**", pattern), recursive=True))
+    for pattern in ("snap_*.h5", "*.csv", "summary.json"):
+        if names(a, pattern) != names(b, pattern):
+            fail(f"{b} holds other {pattern} files than {a}: {names(b, pattern)} against {names(a, pattern)}")
+    for rel in names(a, "snap_*.h5"):
+        fa, aa = load(os.path.join(a, rel))
+        fb, ab = load(os.path.join(b, rel))
+        for k in set(fa) | set(fb):
+            if k not in fa or k not in fb or not np.array_equal(fa[k], fb[k]):
+                fail(f"{rel}: dataset {k} differs between {a} and {b}")
+        for k in set(aa) | set(ab):
+            if not np.array_equal(np.asarray(aa.get(k)), np.asarray(ab.get(k))):
+                fail(f"{rel}: attribute {k} differs between {a} and {b}")
+    for rel in names(a, "*.csv"):
+        if csv_columns(os.path.join(a, rel)) != csv_columns(os.path.join(b, rel)):
+            fail(f"{rel} differs between {a} and {b}")
+    for rel in names(a, "summary.json"):
+        with open(os.path.join(a, rel)) as f:
+            sa = figures(json.load(f))
+        with open(os.path.join(b, rel)) as f:
+            sb = figures(json.load(f))
+        if sa != sb:
+            diff = [k for k in set(sa) | set(sb) if sa.get(k) != sb.get(k)]
+            fail(f"{rel}: figures differ between {a} and {b}: {sorted(diff)[:8]}")
+
+
+def main():
+    out, program, *flags = sys.argv[1:]
+    def take(name, default):
+        if name not in flags:
+            return default
+        i = flags.index(name)
+        value = flags[i + 1]
+        del flags[i : i + 2]
+        return value
+
+    every = take("--every", None)
+    wall_limit = take("--wall", "0.005")
+    base = [program, *flags, "--quiet", "--checkpoint-every", every]
+    whole, wall, sig = (os.path.join(out, d) for d in ("whole", "wall", "signal"))
+    shutil.rmtree(out, ignore_errors=True)  # an earlier checkpoint would be taken for this run's
+    run([*base, "--overwrite", "--out", whole], [0])
+
+    p = run([*base, "--overwrite", "--out", wall, "--max-wall", wall_limit], [0, 5])
+    stops = 0
+    while p.returncode == 5:
+        stopped_message(p, wall)
+        no_partial(wall)
+        stops += 1
+        if stops > 1000:
+            fail("the run did not finish in 1000 resumes")
+        p = run([program, "--resume", wall, "--quiet"], [0, 5])
+    if stops == 0:
+        fail(f"--max-wall {wall_limit} never stopped the run: nothing was resumed")
+    compare(whole, wall)
+
+    proc = subprocess.Popen([*base, "--overwrite", "--out", sig], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True)
+    while proc.poll() is None and not os.path.exists(os.path.join(sig, "checkpoint.h5")):
+        time.sleep(0.01)
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+    _, err = proc.communicate()
+    if proc.returncode == 5:
+        stopped_message(subprocess.CompletedProcess([], 5, "", err), sig)
+        no_partial(sig)
+        run([program, "--resume", sig, "--quiet", "--max-wall", "0"], [0])
+    elif proc.returncode != 0:
+        fail(f"the run sent SIGINT exited {proc.returncode}: {err.strip()}")
+    compare(whole, sig)
+
+    killed = os.path.join(out, "killed")  # SIGKILL: no handler runs; the last whole checkpoint resumes
+    proc = subprocess.Popen([*base, "--overwrite", "--out", killed], stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    while proc.poll() is None and not os.path.exists(os.path.join(killed, "checkpoint.h5")):
+        time.sleep(0.01)
+    proc.kill()
+    proc.wait()
+    if os.path.exists(os.path.join(killed, "checkpoint.h5")) and not os.path.exists(os.path.join(killed, "summary.json")):
+        run([program, "--resume", killed, "--quiet", "--max-wall", "0"], [0])
+        no_partial(killed)
+        compare(whole, killed)
+    print(f"check_resume: {os.path.basename(program)} resumed {stops} times after --max-wall and once after "
+          f"SIGINT and SIGKILL; every snapshot, curve and figure equals the run left alone")
+
+
+if __name__ == "__main__":
+    main()
