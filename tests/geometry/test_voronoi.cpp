@@ -280,3 +280,22 @@ TEST_CASE("sparse, clustered and outlying sets in walled boxes: every cell exact
   x.emplace_back(0.997, 0.002);
   check(x, box_with(Edge::reflecting, Edge::reflecting));
 }
+
+TEST_CASE("a collinear set in a walled box goes to BoostVoronoi instead of O(N^2) scans", "[voronoi]") {
+  // 2 893 particles on one line: each cell is a strip reaching both walls, and the local builder's discs
+  // would gather every particle of the line for every cell (0.96 s here, 57 s before the cell list was capped).
+  std::vector<Point> x;
+  for (int i = 0; i < 2893; ++i) x.emplace_back((i + 0.5) / 2893, 0.5);
+  const auto box = box_with(Edge::reflecting, Edge::reflecting);
+  LocalVoronoi local;
+  const auto areas = cell_areas(local, x, box);
+  CHECK(local.handed_to_boost());
+  const auto boost = areas_of<BoostVoronoi>(x, box);
+  CHECK(areas == boost);
+  CHECK(std::abs(sum(areas) - 1.0) < 1e-12);
+  CHECK(areas[1000] == Approx(1.0 / 2893).epsilon(1e-9));
+  // a jittered lattice stays with the local builder
+  LocalVoronoi regular;
+  cell_areas(regular, jittered(32, 0.3, 4), box);
+  CHECK(!regular.handed_to_boost());
+}

@@ -297,10 +297,22 @@ inline int builder_threads() { return max_threads(); }
 /// relative to x[a]; particles of one thread arrive in increasing order. When periodic images turn out
 /// too few (a cell reaches past them), the builder widens them and starts again, calling
 /// visit.restart() first: a visitor must then forget what it was given.
+class BoostVoronoi;
+
 class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
  public:
   /// How many cells of the last build took their first cut from the dual hull rather than from clips.
   std::size_t cells_from_hull() const { return cells_from_hull_; }
+
+  /// The build; a set whose cells would make it scan more than scan_budget_per_cell points per cell on average
+  /// goes to BoostVoronoi instead (visit.restart() first). Nearly collinear sets in walled boxes do: their long
+  /// thin cells reach every particle of the line, O(N^2) here (17 s at N = 11 572) against O(N log N) there.
+  template <class Visitor>
+  void build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius, Visitor&& visit,
+             std::span<const std::uint32_t> only = {});
+  /// Whether the last build went to BoostVoronoi.
+  bool handed_to_boost() const { return handed_to_boost_; }
+  static constexpr double scan_budget_per_cell = 2000.0;
 
  private:
   friend class detail::WideningBuilder<LocalVoronoi>;
@@ -504,14 +516,22 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
     neighbors::CellList<2>& cells = cells_;
     const double spacing = detail::mean_spacing(x, box);
     cells.build(sites.x, spacing);
-    std::atomic<bool> ok{true};
-    std::atomic<std::size_t> from_hull{0};
+    std::atomic<bool> ok{true}, too_costly{false};
+    std::atomic<std::size_t> from_hull{0}, scanned{0};
+    const double budget = scan_budget_per_cell * static_cast<double>(detail::chosen_count(sites.n_real, only)) + 1e5;
     rsph::run_parallel(detail::chosen_count(sites.n_real, only), [&](int thread, std::size_t begin, std::size_t end) {
       ConvexPolygon buffers[2];
       // Candidate buffers keep their size; n_found counts what the current disc wrote.
       std::vector<Candidate> found, extra;
       std::size_t n_found = 0, by_hull = 0;
+      std::size_t scanned_here = 0;
       for (std::size_t k = begin; k < end && ok.load(std::memory_order_relaxed); ++k) {
+        if (static_cast<double>(scanned.fetch_add(scanned_here, std::memory_order_relaxed) + scanned_here) > budget) {
+          too_costly.store(true, std::memory_order_relaxed);
+          ok.store(false, std::memory_order_relaxed);
+          break;
+        }
+        scanned_here = 0;
         const std::size_t a = detail::chosen(only, k);
         const Point xa = sites.x[a];
         const double closing = closing_radius.empty() ? 0.0 : closing_radius[a];
@@ -530,6 +550,7 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
           n_found = 0;
           cells.for_each_run_within(xa, radius, [&](const std::uint32_t* index, const Point* at, std::size_t count) {
             grown(found, n_found + count);
+            scanned_here += count;
             // Each point is written and kept by advancing the count, without a branch: in or out is a coin
             // toss no predictor learns. Rows come bottom to top; those above the particle are read right to left,
             // so the candidates arrive nearly in the dual hull's order of angle (counted from -x: below the
@@ -572,8 +593,11 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
       from_hull.fetch_add(by_hull, std::memory_order_relaxed);
     });
     cells_from_hull_ = from_hull.load();
-    return ok;
+    handed_to_boost_ = too_costly.load();
+    return ok || handed_to_boost_;  // handed over: no wider images, BoostVoronoi takes the set
   }
+
+  bool handed_to_boost_ = false;
 
   std::size_t cells_from_hull_ = 0;
   // Kept from build to build: a remap every few dozen steps would otherwise fault in fresh pages each time.
@@ -708,6 +732,18 @@ class BoostVoronoi : public detail::WideningBuilder<BoostVoronoi> {
     return ok.load();
   }
 };
+
+template <class Visitor>
+void LocalVoronoi::build(const std::vector<Point>& x, const Box<2>& box, const std::vector<double>& closing_radius,
+                         Visitor&& visit, std::span<const std::uint32_t> only) {
+  handed_to_boost_ = false;
+  detail::WideningBuilder<LocalVoronoi>::build(x, box, closing_radius, visit, only);
+  if (!handed_to_boost_) return;
+  visit.restart();
+  BoostVoronoi boost;
+  boost.build(x, box, closing_radius, visit, only);
+  cells_from_hull_ = 0;
+}
 
 /// Cell area of every particle, for tests and diagnostics: stores areas, not polygons.
 template <class Builder>
