@@ -30,7 +30,7 @@ TEST_CASE("strong shock, pressure ratio 1e10: RSPH keeps the shock in place and 
   CHECK(r.errors.L1_rho < 0.03);
 }
 
-TEST_CASE("strong shock: plain SPH with alpha = 1 runs, conserves energy, and its penetration is reported",
+TEST_CASE("strong shock: plain SPH with alpha = 1 conserves energy but lets left-state gas through the contact",
           "[strong_shock]") {
   scenes::StrongShockParams s;
   s.sph_nx_left = 300;
@@ -43,7 +43,9 @@ TEST_CASE("strong shock: plain SPH with alpha = 1 runs, conserves energy, and it
   check_physical(r);
   CHECK(r.energy_error < 1e-6);
   CHECK(std::abs(r.shock_position - r.shock_position_exact) < 0.05);
-  CHECK(r.penetration >= 0.0);
+  // The paper's failure of plain SPH (§3.2, Fig. 4): particles of the hot left state cross the contact. Measured
+  // 0.121 of the particles beyond contact + 2h here; RSPH's run above has none.
+  CHECK(r.penetration > 0.05);
 }
 
 TEST_CASE("strong shock on levels in factors of two: fewer particles, shock in place, no penetration",
