@@ -27,11 +27,10 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rsph_plot import read_csv, run_example, save_figure  # noqa: E402
+from rsph_plot import FARGO3D_PROFILE as FARGO, read_csv, run_example, save_figure  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BIN = os.path.join(HERE, "..", "build", "bin")
-FARGO = os.path.join(HERE, "..", "..", "shared", "reference", "fargo3d", "inviscid_sigma_azavg_orbit100.csv")
 ORDERS = ("first", "second")
 
 

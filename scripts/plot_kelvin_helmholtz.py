@@ -11,7 +11,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from rsph_plot import folders_and_png, load, read_csv, read_summary, save_figure  # noqa: E402
+from rsph_plot import folders_and_png, load, method_label, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def main():
@@ -22,7 +22,7 @@ def main():
     amp_ax = fig.add_subplot(grid[-1, :])
     for i, d in enumerate(args.dirs):
         s = read_summary(d)
-        label = f"{s['method'].upper()}, alpha_u = {s['alpha_u']:g}, 1/dx = {s['cells']}"
+        label = f"{method_label(s)}, alpha_u = {s['alpha_u']:g}, 1/dx = {s['cells']}"
         if "h_over_dx" in s:  # older summaries lack it
             label += f", {'h/dx' if s['method'] == 'rsph' else 'eta'} = {s['h_over_dx']:g}"
         ax = fig.add_subplot(grid[i // 2, i % 2])

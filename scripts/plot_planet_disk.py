@@ -6,6 +6,7 @@ average, and the gap depth over time with each run's cost.
   python3 scripts/plot_planet_disk.py out/disk-low [out/disk-med ...] --png out/disk.png
 """
 import math
+import os
 
 import matplotlib
 
@@ -13,12 +14,11 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rsph_plot import folders_and_png, read_csv, read_summary, save_figure  # noqa: E402
+from rsph_plot import FARGO3D_PROFILE, folders_and_png, method_label, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def label(summary):
-    method = "RSPH" if summary["method"] == "rsph" else "SPH"
-    return (f"{method} {summary['eos']}, N={summary['particles_initial']}, "
+    return (f"{method_label(summary)}, {summary['eos']}, N={summary['particles_initial']}, "
             f"{summary['orbits']:g} orbits, {summary['wall_seconds']:.0f} s")
 
 
@@ -62,6 +62,10 @@ def main():
         t = read_csv(f"{d}/timeline.csv")
         ax_gap.plot(t["orbit"], t["gap_depth"], lw=1,
                     label=f"{s['particle_updates_per_second'] / 1e6:.2f} M updates/s")
+    if os.path.exists(FARGO3D_PROFILE):
+        ref = read_csv(FARGO3D_PROFILE)
+        ax_avg.plot(ref["r"], ref["sigma_over_sigma0"], "k-", lw=1.5, label="FARGO3D, 49 152 cells, orbit 100")
+        ax_avg.legend(fontsize=7)
     ax_cut.set_xlabel("r / a (phi = phi_p + pi)")
     ax_cut.set_ylabel("Sigma / Sigma_0")
     ax_cut.set_title("opposite the planet (Fig. 13)", fontsize=9)

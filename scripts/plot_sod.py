@@ -9,7 +9,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from rsph_plot import folders_and_png, read_csv, read_summary, save_figure  # noqa: E402
+from rsph_plot import folders_and_png, method_label, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def main():
@@ -21,7 +21,8 @@ def main():
         s = read_summary(d)
         method = s.get("method", "sph")
         if method == "rsph":
-            name = f"RSPH, levels 0-{s['max_level']}" if s.get("max_level", 0) > 0 else "RSPH, uniform lattice"
+            lattice = f"levels 0-{s['max_level']}" if s.get("max_level", 0) > 0 else "uniform lattice"
+            name = f"{method_label(s)}, {lattice}"
         else:
             name = "grad-h SPH"
         for ax, key, label, err in zip(row, ["rho", "v", "P"], [r"$\rho$", "$v_x$", "$P$"], ["L1_rho", "L1_v", "L1_P"]):

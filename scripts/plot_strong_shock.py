@@ -10,7 +10,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
-from rsph_plot import folders_and_png, read_csv, read_summary, save_figure  # noqa: E402
+from rsph_plot import folders_and_png, method_label, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def main():
@@ -22,7 +22,7 @@ def main():
     for d in args.dirs:
         s = read_summary(d)
         p = read_csv(os.path.join(d, "particles.csv"))
-        label = f"{s['method'].upper()} a={s['alpha']:g} b={s['beta']:g} ({s['particles']} particles)"
+        label = f"{method_label(s)} a={s['alpha']:g} b={s['beta']:g} ({s['particles']} particles)"
         a_rho.plot(p["x"], p["rho"], ".", ms=1.5, label=label)
         a_v.plot(p["x"], p["v"], ".", ms=1.5, label=label)
         a_cost.scatter([s["wall_seconds"]], [s["L1_rho"]], label=label)

@@ -5,6 +5,10 @@ import json
 import os
 import subprocess
 
+# The grid code's azimuthally averaged disk after 100 orbits (de Val-Borro's Jupiter, inviscid, 49 152 cells).
+FARGO3D_PROFILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "shared", "reference",
+                               "fargo3d", "inviscid_sigma_azavg_orbit100.csv")
+
 
 def read_csv(path):
     """Columns of a CSV with a header line, as lists of floats keyed by name."""
@@ -60,3 +64,10 @@ def save_figure(fig, path, dpi=110):
     fig.tight_layout()
     fig.savefig(path, dpi=dpi)
     print(f"wrote {path}")
+
+
+def method_label(summary):
+    """How a run is named in figures and tables: SPH, or RSPH with its remap's order."""
+    if summary.get("method", "rsph") == "sph":
+        return "SPH"
+    return f"RSPH {summary.get('remap', 'first')}-order remap"

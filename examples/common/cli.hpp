@@ -56,6 +56,7 @@ struct CommonOptions {
   int threads = 0;
   bool quiet = false;
   bool overwrite = false;
+  bool no_plot = false;           ///< no figure at the end of the run (common/figure.hpp)
   double checkpoint_every = 0.0;  ///< in the scene's unit; 0: checkpoints only at --max-wall and on signals
   double max_wall = 0.0;          ///< minutes; 0: no limit
   std::string resume;             ///< a run's folder to continue from its checkpoint
@@ -97,7 +98,7 @@ inline void add_remap_flag(Flags& flag, std::string& remap) {
        "RSPH: the remap's order, first (the paper's eqs. 6-9) or second (limited linear reconstruction)");
 }
 
-/// --help, --out, --preset, --threads, --quiet, --overwrite, --config and the checkpoint flags; `quick` says
+/// --help, --out, --preset, --threads, --quiet, --overwrite, --no-plot, --config and the checkpoint flags; `quick` says
 /// what the quick preset changes (flags given keep their values), `unit` the unit of --checkpoint-every.
 inline void add_common_options(Flags& flag, CommonOptions& common, const std::string& quick,
                                const std::string& unit = "simulated time") {
@@ -109,6 +110,8 @@ inline void add_common_options(Flags& flag, CommonOptions& common, const std::st
                      "read parameters from FILE (name = value lines, as a run's params.cfg); flags given win");
   desc.add_options()("overwrite", po::bool_switch(&common.overwrite),
                      "reuse an output folder that holds an earlier run, removing that run's files first");
+  desc.add_options()("no-plot", po::bool_switch(&common.no_plot),
+                     "draw no figure at the end of the run (RSPH_NO_PLOT=1 does the same)");
   flag("preset", common.preset, preset.c_str());
   flag("threads", common.threads, "OpenMP threads (0: all cores)");
   flag("quiet", common.quiet, "no progress line");

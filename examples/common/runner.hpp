@@ -6,6 +6,7 @@
 // are written by one function too.
 #include "common/checkpoints.hpp"
 #include "common/cli.hpp"
+#include "common/figure.hpp"
 #include "common/run_helpers.hpp"
 #include "rsph/io/hdf5_snapshot.hpp"
 #include "rsph/io/json.hpp"

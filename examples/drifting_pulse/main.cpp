@@ -150,6 +150,7 @@ int run(Options opt) {
   summary.set("regularization_seconds", reg_seconds);
   ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
+  ex::draw_figure(common, dir, "drifting_pulse");
   fmt::print("output: {}\n", dir.string());
   return 0;
 }

@@ -75,6 +75,7 @@ int main(int argc, char** argv) {
     summary.set("kinetic_energy_dissipated", res.dissipated);
     ex::write_run_record(summary, common);
     summary.write(dir / "summary.json");
+    ex::draw_figure(common, dir, "linear_wave");
     fmt::print(
         "rsph-linear-wave {} lambda = {} Delta, {}: gamma = {:.3e}, phase error = {:.2e}, amplitude x{:.4f}, "
         "transverse noise {:.1e} -> {:.1e}; {} steps, {:.1f} s\n",

@@ -199,6 +199,7 @@ int run(Options opt) {
   summary.set("phase_seconds", phases).set("timeline", mass_over_time);
   ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
+  ex::draw_figure(common, dir, "planet_disk");
   fmt::print(
       "rsph-planet-disk {} {} q = {}: {} particles, {} steps, {} regularizations, {:.1f} s ({:.2f} M updates/s); "
       "gap depth {:.3f}, mass removed {:.2e} of {:.3e}, mass error {:.1e}\n",

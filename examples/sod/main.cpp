@@ -82,6 +82,7 @@ int run(const Options& opt, Sim sim) {
     summary.set("max_level", opt.rsph.refinement.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
   ex::write_run_record(summary, opt.common);
   summary.write(dir / "summary.json");
+  ex::draw_figure(opt.common, dir, "sod");
   fmt::print(
       "rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
       "energy error {:.2e}\n  output: {}\n",

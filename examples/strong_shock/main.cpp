@@ -121,6 +121,7 @@ int run(Options opt) {
   if (method == "rsph") summary.set("max_level", static_cast<std::uint64_t>(s.refinement.levels));
   ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
+  ex::draw_figure(common, dir, "strong_shock");
   fmt::print(
       "rsph-strong-shock {} (alpha {}, beta {}): {} particles, {} steps, {} regularizations, {:.1f} s\n"
       "  L1(rho) = {:.4g}, L1(v) = {:.4g}; shock at {:.4f} (exact {:.4f}); penetration {:.3f}; energy error {:.2e}\n",

@@ -127,6 +127,7 @@ int run(Options opt) {
   summary.set("cpu_seconds", ex::cpu_seconds()).set("snapshots", snaps);
   ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
+  ex::draw_figure(common, dir, "viscous_ring");
   fmt::print(
       "rsph-viscous-ring c_r = {} x {}, h/Delta = {}, h = {}: {} particles, {} steps, {} regularizations, {:.1f} s; "
       "nu_eff / nu_s = {:.3f} [{:.3f}, {:.3f}], noise {:.3e}, mass error {:.1e}\n",
