@@ -96,11 +96,13 @@ int run(Options opt) {
   if (r.folds)
     summary.set("overturned_fraction", r.folds->overturned_fraction)
         .set("interface_crossings", r.folds->mean_crossings);
+  summary.set("mixed_area_fraction", r.contact.mixed_area).set("pressure_error", r.contact.pressure_error);
   summary.set("energy_error", r.energy_error);
   ex::write_cost(summary, r);
   summary.merge(scheme);
   ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
+  ex::draw_figure(common, dir, "kelvin_helmholtz");
   std::string line = fmt::format(
       "rsph-kelvin-helmholtz {} alpha_u = {}: {} particles, {} steps, {:.1f} s; amplitude "
       "{:.4f} -> {:.4f}",

@@ -142,12 +142,34 @@ analysis::InterfaceFolds interface_folds(const P& p, const KelvinHelmholtzParams
   return analysis::interface_folds<kernel::CubicSpline>(p, s.box(), std::sqrt(s.chi), 0.25 / s.cells);
 }
 
+/// How a method treats the contact between the phases, the failure of plain SPH at chi = 10 that Agertz et
+/// al. (2007, the gap between the phases) and Price (2008, the pressure blip of a temperature jump without
+/// conductivity) describe: the share of the box's area at densities between the phases' (1.5 < rho <
+/// chi / 1.5: mixed gas), and the mass-weighted rms of P / P_0 - 1 (0 where pressure stays uniform).
+struct ContactMeasures {
+  double mixed_area = 0.0, pressure_error = 0.0;
+};
+
+template <class P>
+ContactMeasures contact_measures(const P& p, const KelvinHelmholtzParams& s) {
+  double area = 0.0, mixed = 0.0, mass = 0.0, squares = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const double V = p.m[a] / p.rho[a], dp = p.P[a] / s.P - 1.0;
+    area += V;
+    if (p.rho[a] > 1.5 && p.rho[a] < s.chi / 1.5) mixed += V;
+    mass += p.m[a];
+    squares += p.m[a] * dp * dp;
+  }
+  return {mixed / area, std::sqrt(squares / mass)};
+}
+
 struct KhRun : examples::RunCost {
   std::vector<double> t, amplitude, thickness;  ///< per step: time, mode amplitude, momentum thickness
   double seed = 0.0, amplitude_final = 0.0, growth_rate = 0.0;
   double energy_error = 0.0;
   /// At the end: how far the interface has rolled up (with two phases, chi > 1).
   std::optional<analysis::InterfaceFolds> folds;
+  ContactMeasures contact;  ///< at the end
 };
 
 /// Least-squares slope of ln M over [t0, t1]: the growth rate of the linear phase.
@@ -190,6 +212,7 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
   on_end(sim);
   r.amplitude_final = r.amplitude.back();
   if (s.chi > 1.0) r.folds = interface_folds(sim.particles(), s);
+  r.contact = contact_measures(sim.particles(), s);
   r.growth_rate = fitted_growth_rate(r.t, r.amplitude, 0.1 * s.tau_KH(), 0.5 * s.tau_KH());
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
   return r;
