@@ -33,8 +33,8 @@ def main():
         ax.set_xlim(-0.5, -0.5 + s.get("wavelengths", 6) / 6)  # the box holds `wavelengths` of 1/6
         ax.set_ylim(0, 0.5)
         ax.set_aspect("equal")
-        narrow = s.get("wavelengths", 6) < 6  # a narrow box: the title in lines
-        title = f"{label}:{chr(10) if narrow else ' '}t = {t:.2f}, {s['particles']} particles, {s['wall_seconds']:.0f} s"
+        narrow = s.get("wavelengths", 6) < 6  # a narrow box: the title in three lines, else two
+        title = f"{label}:\nt = {t:.2f}, {s['particles']} particles, {s['wall_seconds']:.0f} s"
         if "overturned_fraction" in s:
             title += f",{chr(10) if narrow else ' '}{100 * s['overturned_fraction']:.0f} % overturned"
         ax.set_title(title, fontsize=9)

@@ -30,7 +30,7 @@ def main():
             ax.plot(exact["x"], exact[key], "-", lw=1, color="k", label="exact")
             ax.set_xlabel("x")
             ax.set_ylabel(label)
-            ax.set_title(f"{name}, {s['dim']}D, {s['particles']} particles: L1 = {s[err]:.2e}", fontsize=9)
+            ax.set_title(f"{name}, {s['dim']}D, {s['particles']} particles:\nL1 = {s[err]:.2e}", fontsize=9)
         row[0].legend(fontsize=8)
         row[2].text(0.02, 0.05, f"{s['steps']} steps, {s['wall_seconds']:.2f} s\n"
                     f"{s['particle_updates_per_second']:.3g} particle updates/s", transform=row[2].transAxes,
