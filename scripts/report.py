@@ -27,28 +27,14 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter  # noqa: 
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from report_tests import TESTS, finite  # noqa: E402
-from rsph_plot import read_summary, save_figure  # noqa: E402
+from rsph_plot import finished_with, run_example, save_figure  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
 
-def matches(folder, args):
-    """Whether the run in `folder` finished with these flags."""
-    path = os.path.join(folder, "summary.json")
-    if not os.path.exists(path):
-        return False
-    return read_summary(folder).get("command_line", "").endswith(" ".join(str(a) for a in args))
-
-
-def execute(binary, folder, args):
-    cmd = [binary, "--out", folder, "--overwrite", "--quiet", "--no-plot", "--threads", "1"] + [str(a) for a in args]
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr.strip()}")
-
-
 class Progress:
-    """A line with runs done, elapsed time and an ETA (on a terminal; one line per run otherwise)."""
+    """A line with runs done, elapsed time and an ETA (on a terminal; one line per run otherwise). The ETA
+    scales the time taken so far by the guessed cost (core-seconds) still to come over that done."""
 
     def __init__(self, total_guess, count):
         self.total, self.done_guess, self.count, self.done = total_guess, 0.0, count, 0
@@ -77,16 +63,13 @@ def fmt_time(s):
 def run_suite(a, tests):
     """Runs (or reuses) every run of `tests`; returns {test key: [(Run, summary, measures, folder)]}."""
     todo = [(t, r) for t in tests for r in t.runs(a.suite)]
-    jobs_per_core = max(a.jobs, 1)
-    progress = Progress(sum(r.guess for _, r in todo) / jobs_per_core, len(todo))
-    folders = {}
+    progress = Progress(sum(r.guess for _, r in todo), len(todo))
+    done = {}
 
     def one(t, r):
         folder = os.path.join(a.out, "runs", r.folder(t.key))
-        reused = matches(folder, r.args)
-        if not reused:
-            execute(os.path.join(a.bin, r.program), folder, r.args)
-        return folder, reused
+        reused = finished_with(folder, r.args)
+        return folder, run_example(os.path.join(a.bin, r.program), folder, r.args, rerun=False), reused
 
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as pool:
         # the longest first, so that the short runs fill in beside them at the end
@@ -95,18 +78,17 @@ def run_suite(a, tests):
         for f in cf.as_completed(futures):
             t, r = futures[f]
             try:
-                folders[(t.key, id(r))], reused = f.result()
+                folder, s, reused = f.result()
+                done[id(r)] = (r, s, t.measures(s, folder), folder)
             except RuntimeError as e:
                 failed.append(str(e))
                 reused = False
-            progress.finished(f"{t.key}, {r.method}, {r.size}", r.guess / jobs_per_core, reused)
+            progress.finished(f"{t.key}, {r.method}, {r.size}", r.guess, reused)
     if failed:
         sys.exit("report: runs failed, no report written:\n" + "\n".join(failed))
     results = {}
     for t, r in todo:
-        folder = folders[(t.key, id(r))]
-        s = read_summary(folder)
-        results.setdefault(t.key, []).append((r, s, t.measures(s, folder), folder))
+        results.setdefault(t.key, []).append(done[id(r)])
     return results
 
 
@@ -177,7 +159,7 @@ def test_section(t, rows, out):
     for r, s, m, _ in rows:
         particles = s.get("mean_particles", s.get("particles", s.get("cells", 0)))
         h.append(f"<tr><th>{html.escape(r.method)}</th><th>{html.escape(r.size)}</th>" +
-                 "".join(cell(m[n]) if n in m else "<td>0</td>" for n in names) + cell(particles) +
+                 "".join(cell(m[n]) for n in names) + cell(particles) +
                  cell(s["wall_seconds"]) + cell(s["particle_updates_per_second"]) + "</tr>")
     h.append("</table>")
     claims = claims_of(t, rows)

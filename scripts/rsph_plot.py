@@ -37,14 +37,20 @@ def floats(text):
     return [float(x) for x in text.split(",") if x]
 
 
+def finished_with(out, args):
+    """Whether `out` holds a finished run made with these flags (its summary.json records the command)."""
+    if not os.path.exists(os.path.join(out, "summary.json")):
+        return False
+    return read_summary(out).get("command_line", "").endswith(" ".join(str(a) for a in args))
+
+
 def run_example(binary, out, args, rerun=True):
-    """Runs one example on one thread into `out` and returns its summary; with rerun=False a run whose
-    summary.json exists is not repeated."""
-    summary = os.path.join(out, "summary.json")
-    if not rerun and os.path.exists(summary):
+    """Runs one example on one thread into `out`, without its figure, and returns its summary; with
+    rerun=False a run that finished there with the same flags is kept."""
+    if not rerun and finished_with(out, args):
         return read_summary(out)
     os.makedirs(out, exist_ok=True)
-    cmd = [binary, "--out", out, "--overwrite", "--quiet", "--threads", "1"] + [str(a) for a in args]
+    cmd = [binary, "--out", out, "--overwrite", "--quiet", "--no-plot", "--threads", "1"] + [str(a) for a in args]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n{proc.stderr}")
