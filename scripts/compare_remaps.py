@@ -45,9 +45,11 @@ def wave_runs(a):
 
 
 def ring_runs(a):
+    """The quick preset, or with --ring-paper the paper's h = 0.02 in folders of their own (h0.02_...)."""
     base = ["--max-bin", 3] if a.ring_paper else ["--preset", "quick"]
-    return [("ring", {"c_r": c, "h_over_dx": hdx}, "rsph-viscous-ring", base + ["--cycle", c, "--h-over-dx", hdx])
-            for hdx in (1.4, 1.6) for c in (1, 2, 4, 8)]
+    h = {"h": 0.02} if a.ring_paper else {}
+    return [("ring", {**h, "c_r": c, "h_over_dx": hdx}, "rsph-viscous-ring",
+             base + ["--cycle", c, "--h-over-dx", hdx]) for hdx in (1.4, 1.6) for c in (1, 2, 4, 8)]
 
 
 def kh_runs(a):
