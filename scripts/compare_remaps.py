@@ -27,7 +27,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rsph_plot import FARGO3D_PROFILE as FARGO, read_csv, run_example, save_figure  # noqa: E402
+from rsph_plot import FARGO3D_PROFILE as FARGO, read_csv, read_summary, run_example, save_figure  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BIN = os.path.join(HERE, "..", "build", "bin")
@@ -104,7 +104,9 @@ def run_all(a, jobs):
         futures = {}
         for name, setting, order, binary, args in todo:
             out = folder(a.out, name, setting, order)
-            if a.plot_only and not os.path.exists(os.path.join(out, "summary.json")):
+            if a.plot_only:  # what is there, whatever flags it ran with (a run continued from a checkpoint)
+                if os.path.exists(os.path.join(out, "summary.json")):
+                    futures[pool.submit(read_summary, out)] = (name, setting, order, out)
                 continue
             futures[pool.submit(run_example, binary, out, args, False)] = (name, setting, order, out)
         for f in cf.as_completed(futures):
@@ -207,7 +209,7 @@ def main():
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--ring-paper", action="store_true", help="the ring at h = 0.02, nu_s = 4.8e-5 (hours)")
     ap.add_argument("--disk-resolutions", default="low")
-    ap.add_argument("--plot-only", action="store_true")
+    ap.add_argument("--plot-only", action="store_true", help="tables and charts from the runs there; runs nothing")
     a = ap.parse_args()
     for t in a.only.split(","):
         if t not in TESTS:
