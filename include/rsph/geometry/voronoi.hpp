@@ -313,6 +313,8 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
   /// Whether the last build went to BoostVoronoi.
   bool handed_to_boost() const { return handed_to_boost_; }
   static constexpr double scan_budget_per_cell = 2000.0;
+  /// Points a thread scans before it adds them to the shared count the budget is checked against.
+  static constexpr std::size_t scan_flush = 4096;
 
  private:
   friend class detail::WideningBuilder<LocalVoronoi>;
@@ -526,12 +528,17 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
       std::size_t n_found = 0, by_hull = 0;
       std::size_t scanned_here = 0;
       for (std::size_t k = begin; k < end && ok.load(std::memory_order_relaxed); ++k) {
-        if (static_cast<double>(scanned.fetch_add(scanned_here, std::memory_order_relaxed) + scanned_here) > budget) {
-          too_costly.store(true, std::memory_order_relaxed);
-          ok.store(false, std::memory_order_relaxed);
-          break;
+        // The shared count is added to once per few thousand points scanned (a few dozen ordinary cells): added
+        // to per cell, its cache line went back and forth between the cores. The budget is overrun by at
+        // most that much per thread.
+        if (scanned_here >= scan_flush) {
+          if (static_cast<double>(scanned.fetch_add(scanned_here, std::memory_order_relaxed) + scanned_here) > budget) {
+            too_costly.store(true, std::memory_order_relaxed);
+            ok.store(false, std::memory_order_relaxed);
+            break;
+          }
+          scanned_here = 0;
         }
-        scanned_here = 0;
         const std::size_t a = detail::chosen(only, k);
         const Point xa = sites.x[a];
         const double closing = closing_radius.empty() ? 0.0 : closing_radius[a];
