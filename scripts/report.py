@@ -27,7 +27,7 @@ from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter  # noqa: 
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from report_tests import TESTS, finite  # noqa: E402
-from rsph_plot import finished_with, read_summary, run_example, save_figure  # noqa: E402
+from rsph_plot import kept_summary, run_example, save_figure  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -68,8 +68,9 @@ def run_suite(a, tests):
 
     def one(t, r):
         folder = os.path.join(a.out, "runs", r.folder(t.key))
-        if finished_with(folder, r.args):
-            return folder, read_summary(folder), True
+        kept = kept_summary(folder, r.args)
+        if kept is not None:
+            return folder, kept, True
         return folder, run_example(os.path.join(a.bin, r.program), folder, r.args), False
 
     with cf.ThreadPoolExecutor(max_workers=a.jobs) as pool:

@@ -37,18 +37,21 @@ def floats(text):
     return [float(x) for x in text.split(",") if x]
 
 
-def finished_with(out, args):
-    """Whether `out` holds a finished run made with these flags (its summary.json records the command)."""
+def kept_summary(out, args):
+    """The summary of a finished run in `out` made with these flags (its summary.json records the command),
+    or None."""
     if not os.path.exists(os.path.join(out, "summary.json")):
-        return False
-    return read_summary(out).get("command_line", "").endswith(" ".join(str(a) for a in args))
+        return None
+    summary = read_summary(out)
+    return summary if summary.get("command_line", "").endswith(" ".join(str(a) for a in args)) else None
 
 
 def run_example(binary, out, args, rerun=True):
     """Runs one example on one thread into `out`, without its figure, and returns its summary; with
     rerun=False a run that finished there with the same flags is kept."""
-    if not rerun and finished_with(out, args):
-        return read_summary(out)
+    kept = None if rerun else kept_summary(out, args)
+    if kept is not None:
+        return kept
     os.makedirs(out, exist_ok=True)
     cmd = [binary, "--out", out, "--overwrite", "--quiet", "--no-plot", "--threads", "1"] + [str(a) for a in args]
     proc = subprocess.run(cmd, capture_output=True, text=True)
