@@ -529,8 +529,8 @@ class LocalVoronoi : public detail::WideningBuilder<LocalVoronoi> {
       std::size_t scanned_here = 0;
       for (std::size_t k = begin; k < end && ok.load(std::memory_order_relaxed); ++k) {
         // The shared count is added to once per few thousand points scanned (a few dozen ordinary cells): added
-        // to per cell, its cache line went back and forth between the cores. The budget is overrun by at
-        // most that much per thread.
+        // to per cell, its cache line went back and forth between the cores. A thread overruns the budget by
+        // at most scan_flush points and one cell's scan.
         if (scanned_here >= scan_flush) {
           if (static_cast<double>(scanned.fetch_add(scanned_here, std::memory_order_relaxed) + scanned_here) > budget) {
             too_costly.store(true, std::memory_order_relaxed);
