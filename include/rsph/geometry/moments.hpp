@@ -1,7 +1,9 @@
 #pragma once
 // Area, first and second moments of convex polygons by Green's theorem, and the cut of a polygon by an
-// axis-parallel line into its two sides: what a remap that carries gradients needs of every overlap.
+// axis-parallel line into its two sides: what a remap that carries gradients needs of every overlap. In 3D,
+// the volume, first and second moments of convex polyhedra by the divergence theorem.
 #include "rsph/geometry/polygon.hpp"
+#include "rsph/geometry/polyhedron.hpp"
 
 namespace rsph::geometry {
 
@@ -67,6 +69,48 @@ inline void split_at(const ConvexPolygon& in, int axis, double c, ConvexPolygon&
   }
   if (below.n < 3) below.clear();
   if (above.n < 3) above.clear();
+}
+
+/// The integrals of 1, x and x x^T over a 3D region (coordinates of the polyhedron's own frame).
+struct Moments3 {
+  double volume = 0.0;
+  Point3 first = Point3::Zero();
+  Mat<3> second = Mat<3>::Zero();
+
+  Moments3& operator+=(const Moments3& o) {
+    volume += o.volume;
+    first += o.first;
+    second += o.second;
+    return *this;
+  }
+  Point3 centroid() const { return first / volume; }
+};
+
+/// The divergence theorem over the faces, each fanned from its first corner: the tetrahedron of the origin
+/// and a triangle (a, b, c), with det = a . (b x c), has volume det/6, first moment det/24 (a + b + c) and
+/// second moment det/120 (a a^T + b b^T + c c^T + s s^T), s = a + b + c.
+inline Moments3 moments(const ConvexPolyhedron& p) {
+  double six_v = 0.0;
+  Point3 first = Point3::Zero();
+  Mat<3> second = Mat<3>::Zero();
+  for (int f = 0; f < p.nf; ++f) {
+    const int begin = p.face_start[static_cast<std::size_t>(f)], end = p.face_start[static_cast<std::size_t>(f) + 1];
+    const Point3& a = p[p.corner[static_cast<std::size_t>(begin)]];
+    for (int k = begin + 1; k + 1 < end; ++k) {
+      const Point3& b = p[p.corner[static_cast<std::size_t>(k)]];
+      const Point3& c = p[p.corner[static_cast<std::size_t>(k) + 1]];
+      const double det = triple(a, b, c);
+      const Point3 sum = a + b + c;
+      six_v += det;
+      first += det * sum;
+      second += det * (a * a.transpose() + b * b.transpose() + c * c.transpose() + sum * sum.transpose());
+    }
+  }
+  Moments3 m;
+  m.volume = six_v / 6.0;
+  m.first = first / 24.0;
+  m.second = second / 120.0;
+  return m;
 }
 
 }  // namespace rsph::geometry
