@@ -149,17 +149,8 @@ inline void write_run_record(io::Json& summary, const CommonOptions& common) {
 template <class Sim>
 void write_scheme(io::Json& summary, const Sim& sim) {
   if constexpr (requires { sim.regularizer().remap_order(); }) {
-    std::size_t first_order_cells = 0, limited_cells = 0, refilled = 0;
-    for (const auto& r : sim.regularizer().log()) {
-      first_order_cells += r.stats.first_order_cells;
-      limited_cells += r.stats.limited_cells;
-      refilled += r.stats.passes > 1;
-    }
     summary.set("remap", sim.regularizer().remap_order());
-    if (std::string(sim.regularizer().remap_order()) == "second")
-      summary.set("remap_limited_cells", limited_cells)
-          .set("remap_first_order_cells", first_order_cells)
-          .set("remaps_refilled_at_first_order", refilled);
+    sim.regularizer().order_figures([&](const char* name, auto value) { summary.set(name, value); });
   }
   if constexpr (requires { sim.regularizer().lattice().max_level; })
     summary.set("levels", level_counts(sim.regularizer().log(), sim.steps()));

@@ -55,7 +55,7 @@ DriftingPulse<Kernel, Order> make_drifting_pulse(const DriftingPulseParams& s, O
   ts.dt_max = s.T_reg();  // force-free: one step per regularization
   return DriftingPulse<Kernel, Order>(std::move(p), box, eos::Pressureless{},
                                       DriftRegularizer<Order>(lattice::Uniform1D{dx}, schedule::EveryT{s.T_reg()},
-                                                              regularize::RemapParams{s.h_over_dx}, {}, {}, order),
+                                                              {.remap = {s.h_over_dx}, .order = order}),
                                       ts);
 }
 

@@ -240,7 +240,7 @@ RsphKh<Order, Terms...> make_rsph_kh(const KelvinHelmholtzParams& s, Order order
   return RsphKh<Order, Terms...>(
       kh_lattice(s, s.h_over_dx), s.box(), eos::IdealGas{s.gamma},
       KhRegularizer<Order>(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
-                           regularize::RemapParams{s.h_over_dx}, {}, {}, order),
+                           {.remap = {s.h_over_dx}, .order = order}),
       kh_time_steps(s), terms...);
 }
 

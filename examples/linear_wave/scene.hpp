@@ -117,7 +117,7 @@ RsphWave<Kernel, Order> make_rsph_wave(const LinearWaveParams& s, Order order = 
   return RsphWave<Kernel, Order>(
       linear_wave_particles(s), s.box(), eos::Isothermal{s.cs},
       WaveRegularizer<Order>(lattice::Square{s.spacing()}, schedule::EveryT{s.r * s.period()},
-                             regularize::RemapParams{s.h_over_dx}, {}, {}, order),
+                             {.remap = {s.h_over_dx}, .order = order}),
       wave_time_steps(s));
 }
 

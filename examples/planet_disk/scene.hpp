@@ -285,7 +285,7 @@ RsphDisk<Lattice, EOS, Order> make_rsph_disk(const PlanetDiskParams& s, const La
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
   DiskRegularizer<Lattice, Order> reg(
       lat, schedule::Adaptive<DiskKernel, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)},
-      remap, {}, region::Annulus{s.r_in, s.r_out}, order);
+      {.remap = remap, .region = region::Annulus{s.r_in, s.r_out}, .order = order});
   return RsphDisk<Lattice, EOS, Order>(disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg),
                                        disk_time_steps(s), s.star_planet(), s.zones());
 }

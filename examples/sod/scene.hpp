@@ -150,7 +150,7 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Order, Extra...> make_rs
   ts.max_bin = r.max_bin;
   return RsphSodSimulation<D, Kernel, Order, Extra...>(
       std::move(p), box, gas,
-      RsphSodRegularizer<D, Order>(std::move(ml), schedule::EveryNSteps{r.cycle}, remap, {}, {}, Order{}), ts,
+      RsphSodRegularizer<D, Order>(std::move(ml), schedule::EveryNSteps{r.cycle}, {.remap = remap}), ts,
       physics::ArtificialViscosity{s.alpha, s.beta}, extra...);
 }
 

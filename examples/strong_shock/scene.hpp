@@ -157,7 +157,7 @@ RsphShock<Order> make_rsph_shock(const StrongShockParams& s, Order order = {}) {
       std::move(p), box, gas,
       ShockRegularizer<Order>(lattice::Square{dx},
                               schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
-                              regularize::RemapParams{s.h_over_dx}, {}, {}, order),
+                              {.remap = {s.h_over_dx}, .order = order}),
       ts, physics::ArtificialViscosity{s.alpha, s.beta});
 }
 
@@ -193,7 +193,7 @@ RsphLevelShock<Order> make_rsph_levels_shock(const StrongShockParams& s, Order o
       std::move(p), box, gas,
       LevelShockRegularizer<Order>(std::move(ml),
                                    schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
-                                   remap, {}, {}, order),
+                                   {.remap = remap, .order = order}),
       ts, physics::ArtificialViscosity{s.alpha, s.beta}, physics::ConsistentGradient{});
 }
 

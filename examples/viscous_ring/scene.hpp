@@ -280,8 +280,8 @@ RsphRing<Lattice, Viscosity, Order> make_rsph_ring(const ViscousRingParams& s, c
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
   return RsphRing<Lattice, Viscosity, Order>(
       ring_particles_on(s, lat), s.box(), {},
-      RingRegularizer<Lattice, Order>(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit}, remap, {}, {},
-                                      order),
+      RingRegularizer<Lattice, Order>(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit},
+                                      {.remap = remap, .order = order}),
       ring_time_steps<Viscosity>(s), ring_viscosity<Viscosity, Lattice>(s),
       physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
 }

@@ -2,7 +2,7 @@
 // lattice-corner and far-outlier sets with fixed seeds, in periodic, walled, open and mixed boxes. Each builder's
 // cells tile the domain (and on small sets equal the brute-force cells); each remap conserves mass, momentum and
 // energy and gives finite particles, or refuses the set with an error that says why. Never a crash, a hang or a
-// NaN. RSPH_FUZZ_CASES sets how many cases (default 3000; tens of thousands for a long run).
+// NaN. RSPH_FUZZ_CASES sets how many cases (default 3000, half as many in 3D; tens of thousands for a long run).
 #include "rsph/rsph.hpp"
 
 #include <catch2/catch.hpp>
@@ -11,6 +11,8 @@
 #include <numeric>
 #include <random>
 #include <string>
+
+#include "voronoi3d_sets.hpp"
 
 using namespace rsph;
 using geometry::Point;
@@ -177,20 +179,19 @@ ParticleSet<2, true> gas_on(const Case& c, unsigned seed) {
   return p;
 }
 
-/// Remaps the set at first or second order: conserved to 1e-12 and finite, or refused by an error.
-template <class Order>
-void check_remap(const Case& c, unsigned seed) {
-  auto p = gas_on(c, seed);
+/// Remaps the gas onto `lattice` at first or second order: conserved to 1e-12 and finite, or refused by an
+/// error that says why.
+template <class Order, class Lattice, int D>
+void check_remap(ParticleSet<D, true> p, const Box<D>& box, const Lattice& lattice) {
   const auto before = conservation(p);
   double scale = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) scale += p.m[a] * p.v[a].norm();
-  const double dx = 1.0 / std::max(4.0, std::round(std::sqrt(double(c.x.size()))));
-  regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps, geometry::LocalVoronoi, region::Unbounded,
-                                 Order>
-      reg(lattice::Square{dx}, {}, regularize::RemapParams{1.2});
+  regularize::LatticeRegularizer<Lattice, schedule::EveryNSteps, typename geometry::DefaultCellBuilder<D>::type,
+                                 region::Unbounded, Order>
+      reg(lattice, {}, {.remap = {1.2}});
   std::string refused;
   try {
-    reg.remap(p, c.box, StepInfo{});
+    reg.remap(p, box, StepInfo{});
   } catch (const InputError& e) {
     refused = e.what();
   } catch (const NumericalError& e) {
@@ -226,10 +227,157 @@ TEST_CASE("fuzz: both Voronoi builders and both remaps on hostile sets", "[fuzz]
     if (!check_cells(c)) continue;
     ++built;
     if (seed % 3 != 0) continue;  // the remaps on a third of the cases (each builds the cells again)
-    check_remap<regularize::FirstOrder>(c, seed);
-    check_remap<regularize::SecondOrder>(c, seed);
+    const double dx = 1.0 / std::max(4.0, std::round(std::sqrt(double(c.x.size()))));
+    check_remap<regularize::FirstOrder>(gas_on(c, seed), c.box, lattice::Square{dx});
+    check_remap<regularize::SecondOrder>(gas_on(c, seed), c.box, lattice::Square{dx});
     ++remapped;
   }
   CHECK(built > n * 3 / 4);  // refusals are the exception: coincident sites, nearly collinear sets
+  CHECK(remapped > 0);
+}
+
+// The 3D half: the same kinds of set (uniform, clustered, on a line or a few planes, nearly coincident pairs,
+// lattice nodes, far outliers) in periodic, walled, open and mixed boxes, for LocalVoronoi3 and the 3D remaps
+// of both orders. Half as many cases as the 2D half.
+namespace {
+
+using geometry::Point3;
+
+struct Case3 {
+  std::vector<Point3> x;
+  Box<3> box;
+  std::string what;
+};
+
+const char* const kinds3[] = {"uniform",         "clustered",     "collinear or coplanar",
+                              "near-coincident", "lattice nodes", "far outlier"};
+
+Case3 make_case3(unsigned seed) {
+  std::mt19937_64 rng(seed + 7777u);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const int kind = static_cast<int>(seed % 6);
+  const Edge edges[5][3] = {{Edge::periodic, Edge::periodic, Edge::periodic},
+                            {Edge::reflecting, Edge::reflecting, Edge::reflecting},
+                            {Edge::open, Edge::open, Edge::open},
+                            {Edge::periodic, Edge::reflecting, Edge::open},
+                            {Edge::open, Edge::periodic, Edge::periodic}};
+  Case3 c;
+  const auto& e = edges[(seed / 6) % 5];
+  c.box.edge = {e[0], e[1], e[2]};
+  const int n = 2 + static_cast<int>(std::uniform_int_distribution<int>(0, 148)(rng));
+  auto inside = [](Point3 p) { return p.cwiseMax(Point3::Constant(1e-9)).cwiseMin(Point3::Constant(1.0 - 1e-9)); };
+  switch (kind) {
+    case 0:
+      for (int i = 0; i < n; ++i) c.x.emplace_back(u(rng), u(rng), u(rng));
+      break;
+    case 1: {  // a tight cluster, its width 1e-4 to 1e-1
+      std::normal_distribution<double> g(0.0, std::pow(10.0, -1.0 - 3.0 * u(rng)));
+      const Point3 centre(0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng));
+      for (int i = 0; i < n; ++i) c.x.push_back(inside(centre + Point3(g(rng), g(rng), g(rng))));
+      break;
+    }
+    case 2: {  // on one line (odd seeds) or on two to four planes z = const, a few with a hair of noise
+      const int planes = 2 + static_cast<int>(seed / 30 % 3);
+      for (int i = 0; i < n; ++i) {
+        const double t = (i + 0.5) / n, hair = i % 7 == 0 ? 1e-7 * u(rng) : 0.0;
+        if (seed % 2)
+          c.x.push_back(inside(Point3(t, 0.3 + 0.2 * t + hair, 0.6)));
+        else
+          c.x.push_back(inside(Point3(u(rng), u(rng), (0.5 + i % planes) / planes + hair)));
+      }
+      break;
+    }
+    case 3:  // pairs 1e-9 to 1e-11 of a spacing apart
+      for (int i = 0; i < n; i += 2) {
+        const Point3 p(u(rng), u(rng), u(rng));
+        c.x.push_back(p);
+        const double sep = std::pow(10.0, -9.0 - 2.0 * u(rng)) / std::cbrt(double(n));
+        c.x.push_back(inside(p + Point3(sep, 0.0, 0.0)));
+      }
+      break;
+    case 4: {  // on the nodes of a lattice, its corners, edges and faces included
+      const int m = 2 + static_cast<int>(std::cbrt(double(n)));
+      for (int k = 0; k < m; ++k)
+        for (int j = 0; j < m; ++j)
+          for (int i = 0; i < m; ++i)
+            if (u(rng) < 0.7) c.x.push_back(inside(Point3(i, j, k) / (m - 1)));
+      if (c.x.size() < 2) c.x = {Point3::Constant(0.25), Point3::Constant(0.75)};
+      break;
+    }
+    default: {  // a cluster and a few outliers: far away across open edges, in the corners otherwise
+      std::normal_distribution<double> g(0.3, 0.01);
+      for (int i = 0; i < n; ++i) c.x.push_back(inside(Point3(g(rng), g(rng), g(rng))));
+      c.x.emplace_back(c.box.edge[0] == Edge::open ? 40.0 : 0.999, 0.999, 0.5);
+      c.x.emplace_back(0.001, 0.5, c.box.edge[2] == Edge::open ? -25.0 : 0.998);
+      break;
+    }
+  }
+  c.what = std::string(kinds3[kind]) + ", " + std::to_string(c.x.size()) + " particles, seed " + std::to_string(seed);
+  return c;
+}
+
+bool closed3(const Box<3>& box) {
+  return box.edge[0] != Edge::open && box.edge[1] != Edge::open && box.edge[2] != Edge::open;
+}
+
+/// Builds the 3D cells: finite and positive, tiling a closed box, equal to the brute-force cells on small sets;
+/// or the set refused with an error that says why. Returns whether they were built.
+bool check_cells3(const Case3& c) {
+  const std::vector<double> closing(c.x.size(), closed3(c.box) ? 0.0 : 0.05);
+  std::vector<double> volumes;
+  try {
+    geometry::LocalVoronoi3 builder;
+    volumes = geometry::cell_volumes(builder, c.x, c.box, closing);
+  } catch (const InputError& e) {
+    INFO(e.what());
+    CHECK(std::string(e.what()).size() > 20);
+    return false;
+  }
+  for (double v : volumes) {
+    REQUIRE(std::isfinite(v));
+    REQUIRE(v > 0.0);
+  }
+  if (closed3(c.box)) {
+    const double domain = c.box.volume();
+    CHECK(std::abs(std::accumulate(volumes.begin(), volumes.end(), 0.0) - domain) < 1e-8 * domain);
+  }
+  if (c.x.size() <= 40) {
+    double off = 0.0;
+    for (std::size_t a = 0; a < c.x.size(); ++a) {
+      const double oracle = geometry::volume(test::brute_force_cell(c.x, c.box, a, closing[a]));
+      off = std::max(off, std::abs(volumes[a] - oracle) / oracle);
+    }
+    CHECK(off < 1e-9);
+  }
+  return true;
+}
+
+/// The 3D set as gas with random masses, velocities and energies.
+ParticleSet<3, true> gas_on(const Case3& c, unsigned seed) {
+  std::mt19937_64 rng(seed + 1000003u);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  ParticleSet<3, true> p;
+  for (const auto& x : c.x)
+    p.add(0.5 + u(rng), x, Vec<3>(u(rng) - 0.5, u(rng) - 0.5, u(rng) - 0.5), 0.05, 0.1 + u(rng));
+  return p;
+}
+
+}  // namespace
+
+TEST_CASE("fuzz: the 3D Voronoi builder and both 3D remaps on hostile sets", "[fuzz][geometry][3d]") {
+  const unsigned n = fuzz_cases() / 2;
+  unsigned built = 0, remapped = 0;
+  for (unsigned seed = 0; seed < n; ++seed) {
+    const Case3 c = make_case3(seed);
+    INFO(c.what << ", edges " << int(c.box.edge[0]) << "," << int(c.box.edge[1]) << "," << int(c.box.edge[2]));
+    if (!check_cells3(c)) continue;
+    ++built;
+    if (seed % 3 != 0) continue;
+    const double dx = 1.0 / std::max(3.0, std::round(std::cbrt(double(c.x.size()))));
+    check_remap<regularize::FirstOrder>(gas_on(c, seed), c.box, lattice::Cubic{dx});
+    check_remap<regularize::SecondOrder>(gas_on(c, seed), c.box, lattice::Cubic{dx});
+    ++remapped;
+  }
+  CHECK(built > n * 3 / 4);
   CHECK(remapped > 0);
 }

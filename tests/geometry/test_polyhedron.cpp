@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <map>
 #include <random>
 
 using namespace rsph::geometry;
@@ -46,6 +47,21 @@ bool closed_surface(const ConvexPolyhedron& p) {
           count[static_cast<std::size_t>(i * p.nv + j)] > 1)
         return false;
   return true;
+}
+
+/// The planes of a grid of spacing dx (through the origin) around a cell, and the cells per axis.
+std::pair<std::array<std::array<double, 8>, 3>, std::array<int, 3>> grid_around(const ConvexPolyhedron& cell,
+                                                                                double dx) {
+  std::array<std::array<double, 8>, 3> planes{};
+  std::array<int, 3> n{};
+  for (int k = 0; k < 3; ++k) {
+    const auto [lo, hi] = extent(cell, k);
+    const double first = std::floor(lo / dx);
+    n[static_cast<std::size_t>(k)] = static_cast<int>(std::floor(hi / dx) - first) + 1;
+    for (int c = 0; c <= n[static_cast<std::size_t>(k)]; ++c)
+      planes[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)] = (first + c) * dx;
+  }
+  return {planes, n};
 }
 
 }  // namespace
@@ -146,15 +162,7 @@ TEST_CASE("polyhedron: grid pieces tile the cell, a lattice node splits a cube i
   for (int trial = 0; trial < 100; ++trial) {
     const ConvexPolyhedron cell = random_convex(rng, Point3(u(rng), u(rng), u(rng)) * 0.2, 0.5);
     const double dx = 0.37;
-    std::array<std::array<double, 8>, 3> planes;
-    std::array<int, 3> n;
-    for (int k = 0; k < 3; ++k) {
-      const auto [lo, hi] = extent(cell, k);
-      const double first = std::floor(lo / dx);
-      n[static_cast<std::size_t>(k)] = static_cast<int>(std::floor(hi / dx) - first) + 1;
-      for (int c = 0; c <= n[static_cast<std::size_t>(k)]; ++c)
-        planes[static_cast<std::size_t>(k)][static_cast<std::size_t>(c)] = (first + c) * dx;
-    }
+    const auto [planes, n] = grid_around(cell, dx);
     const Moments3 whole = moments(cell);
     Moments3 sum;
     for_each_grid_piece(cell, {planes[0].data(), planes[1].data(), planes[2].data()}, n, scratch,
@@ -180,4 +188,33 @@ TEST_CASE("polyhedron: grid pieces tile the cell, a lattice node splits a cube i
   }
   CHECK(worst_sum < 1e-13);
   CHECK(worst_piece < 1e-13);
+}
+
+TEST_CASE("polyhedron: grid measures (z pieces as differences below planes) equal the pieces' own", "[geometry][3d]") {
+  std::mt19937 rng(13);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  GridPieceScratch scratch;
+  double worst = 0.0;
+  int pieces = 0;
+  for (int trial = 0; trial < 100; ++trial) {
+    const ConvexPolyhedron cell = random_convex(rng, Point3(u(rng), u(rng), u(rng)) * 0.2, 0.5);
+    const double dx = 0.29;
+    const auto [planes, n] = grid_around(cell, dx);
+    const std::array<const double*, 3> at{planes[0].data(), planes[1].data(), planes[2].data()};
+    std::map<std::array<int, 3>, Moments3> built;
+    for_each_grid_piece(cell, at, n, scratch,
+                        [&](std::array<int, 3> idx, const ConvexPolyhedron& piece) { built[idx] = moments(piece); });
+    const double V = volume(cell);
+    for_each_grid_measure<MomentMeasure>(cell, at, n, scratch, [&](std::array<int, 3> idx, const Moments3& m) {
+      const Moments3 b = built.count(idx) ? built[idx] : Moments3{};
+      worst = std::max({worst, std::abs(m.volume - b.volume) / V, (m.first - b.first).norm() / V,
+                        mat_error(m.second, b.second) / V});
+      ++pieces;
+    });
+    for_each_grid_measure<VolumeMeasure>(cell, at, n, scratch, [&](std::array<int, 3> idx, double v) {
+      worst = std::max(worst, std::abs(v - (built.count(idx) ? built[idx].volume : 0.0)) / V);
+    });
+  }
+  CHECK(pieces > 500);
+  CHECK(worst < 1e-13);
 }

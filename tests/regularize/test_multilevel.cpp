@@ -27,15 +27,14 @@ template <class Order = regularize::FirstOrder, int D, class Lattice>
 regularize::RemapStats conserving_remap(ParticleSet<D, true>& p, const Box<D>& box, Lattice& lattice,
                                         RemapParams params = {}) {
   geometry::LocalVoronoi builder;
+  regularize::RemapWorkspace<D> ws;
+  typename Order::template Workspace<D> w2;
   const auto stats = test::check_conserved(
       p,
       [&](ParticleSet<D, true>& q) {
-        if constexpr (Order::order == 2)
-          return regularize::remap_second_order(q, box, lattice, builder, params, {});
-        else
-          return remap_onto_lattice(q, box, lattice, builder, params);
+        return Order{}.remap(q, box, lattice, builder, params, region::Unbounded{}, ws, w2);
       },
-      Order::order == 1);
+      Order::heats_only);
   std::size_t sum = 0;
   for (auto n : stats.per_level) sum += n;
   CHECK(sum == p.n_real);
@@ -284,7 +283,7 @@ TwoLevelRun run_on_two_levels(Edge y_edge, Velocity&& v_of_x, int steps, Terms..
   conserving_remap(p, box, ml, RemapParams{h_over_dx});
   REQUIRE(p.n_real == 32 * 16 + 16 * 8);
   Simulation<2, kernel::CubicSpline, eos::IdealGas, Reg, Terms...> sim(
-      std::move(p), box, gas, Reg(ml, schedule::EveryNSteps{33}, RemapParams{h_over_dx}), TimeStepParams{}, terms...);
+      std::move(p), box, gas, Reg(ml, schedule::EveryNSteps{33}, {.remap = {h_over_dx}}), TimeStepParams{}, terms...);
   const auto start = sim.totals();
   for (int s = 0; s < steps; ++s) sim.step();
   const auto end = sim.totals();

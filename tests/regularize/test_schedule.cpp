@@ -2,6 +2,8 @@
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
+
 using namespace rsph;
 
 namespace {
@@ -41,12 +43,43 @@ bool adaptive_fires(double scale, schedule::Adaptive<Kernel, 2> adaptive) {
 
 TEST_CASE("Appendix A neighbour numbers: N(h/Delta = 1.1) = 9.5 and N(5) = 308 as the paper says", "[schedule]") {
   // N = V(h) n with n = (lattice sum - W(0)) / Delta^2: the paper's N_min and N_max are these values.
-  auto N_of = [](double eta) {
-    return schedule::Adaptive<Kernel, 2>::interaction_volume(eta) *
-           (kernel::lattice_sum<Kernel, 2>(eta) - kernel::W<Kernel, 2>(0.0, eta));
-  };
+  auto N_of = [](double eta) { return schedule::Adaptive<Kernel, 2>::lattice_neighbour_number(eta); };
   CHECK(N_of(1.1) == Approx(9.5).margin(0.1));
   CHECK(N_of(5.0) == Approx(308.0).margin(1.0));
+  CHECK(N_of(0.9) == Approx(4.5).margin(0.1));  // §5
+  CHECK(N_of(3.0) == Approx(107.0).margin(1.0));
+}
+
+TEST_CASE("Appendix A in 3D: bounds from h/Delta on a cubic lattice; the schedule fires as the lattice deforms",
+          "[schedule][3d]") {
+  using A3 = schedule::Adaptive<Kernel, 3>;
+  // the ball of radius 2h holds (4/3) pi (2 h/Delta)^3 sites, less the particle's own weight
+  const double N_11 = A3::lattice_neighbour_number(1.1), N_5 = A3::lattice_neighbour_number(5.0);
+  CHECK(N_11 == Approx(4.0 / 3.0 * M_PI * std::pow(2.2, 3) * (1.0 - kernel::W<Kernel, 3>(0.0, 1.1))).epsilon(0.05));
+  CHECK(N_5 == Approx(4.0 / 3.0 * M_PI * 1000.0).epsilon(0.01));
+  const A3 bounds = A3::for_h_over_dx(1.1, 1.5, 0.4, 128);
+  CHECK(bounds.N_min == Approx(N_11));
+  using RSPH3 = Simulation<3, Kernel, eos::IdealGas, regularize::LatticeRegularizer<lattice::Cubic, A3>>;
+  auto fires = [&](double scale) {
+    const int n = 8;
+    const double dx = 1.0 / n;
+    ParticleSet<3, true> p;
+    for (int k = 0; k < n; ++k)
+      for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+          p.add(dx * dx * dx, Vec<3>((i + 0.5) * dx, (j + 0.5) * dx, (k + 0.5) * dx), Vec<3>::Zero(), 1.2 * dx / scale,
+                1.0);
+    Box<3> box;
+    box.edge = {Edge::periodic, Edge::periodic, Edge::periodic};
+    RSPH3 sim(std::move(p), box, eos::IdealGas{5.0 / 3.0},
+              regularize::LatticeRegularizer<lattice::Cubic, A3>(lattice::Cubic{dx}, bounds), TimeStepParams{});
+    StepInfo info;
+    info.neighbors = &sim.neighbor_list();
+    return sim.regularizer().schedule().due(sim.particles(), box, info);
+  };
+  CHECK_FALSE(fires(1.0));  // h/Delta = 1.2
+  CHECK(fires(1.25));       // expanded: h/Delta = 0.96
+  CHECK(fires(0.7));        // compressed: h/Delta = 1.7
 }
 
 TEST_CASE("the adaptive schedule fires on compressed and expanded lattices and is quiet on a regular one",

@@ -113,4 +113,88 @@ inline Moments3 moments(const ConvexPolyhedron& p) {
   return m;
 }
 
+namespace detail {
+/// Streams the part of every face of p with x_axis <= c, in the frame of the point O on the plane (O_axis = c,
+/// 0 elsewhere), as fan triangles: add(a, b, c) for each. The caps that close these parts lie in the plane through
+/// O, so their tetrahedra with O have no volume: the triangles alone give the measures of the part below.
+template <class Add>
+void for_each_triangle_below(const ConvexPolyhedron& p, int axis, double c, Add&& add) {
+  Point3 origin = Point3::Zero();
+  origin[axis] = c;
+  for (int f = 0; f < p.nf; ++f) {
+    const int begin = p.face_start[static_cast<std::size_t>(f)], end = p.face_start[static_cast<std::size_t>(f) + 1];
+    Point3 first, previous;
+    int emitted = 0;
+    auto emit = [&](const Point3& x) {
+      if (emitted >= 2) add(first, previous, x);
+      if (emitted == 0) first = x;
+      previous = x;
+      ++emitted;
+    };
+    const Point3* vj = &p[p.corner[static_cast<std::size_t>(end - 1)]];
+    double sj = (*vj)[axis] - c;
+    for (int k = begin; k < end; ++k) {
+      const Point3& vi = p[p.corner[static_cast<std::size_t>(k)]];
+      const double si = vi[axis] - c;
+      if ((si > 0.0) != (sj > 0.0)) {  // the crossing, on the plane exactly
+        Point3 x = *vj + (sj / (sj - si)) * (vi - *vj) - origin;
+        x[axis] = 0.0;
+        emit(x);
+      }
+      if (si <= 0.0) emit(vi - origin);
+      vj = &vi;
+      sj = si;
+    }
+  }
+}
+}  // namespace detail
+
+/// What a first-order 3D remap measures of a piece: its volume, whole or below an axis plane.
+struct VolumeMeasure {
+  using type = double;
+  static double of(const ConvexPolyhedron& p) { return volume(p); }
+  static double below(const ConvexPolyhedron& p, int axis, double c) {
+    double six_v = 0.0;
+    detail::for_each_triangle_below(
+        p, axis, c, [&](const Point3& a, const Point3& b, const Point3& d) { six_v += triple(a, b, d); });
+    return six_v / 6.0;
+  }
+  static double difference(double a, double b) { return a - b; }
+};
+
+/// What a second-order 3D remap measures of a piece: its volume, first and second moments (cell frame).
+struct MomentMeasure {
+  using type = Moments3;
+  static Moments3 of(const ConvexPolyhedron& p) { return moments(p); }
+  static Moments3 below(const ConvexPolyhedron& p, int axis, double c) {
+    double six_v = 0.0;
+    Point3 first = Point3::Zero();
+    Mat<3> second = Mat<3>::Zero();
+    detail::for_each_triangle_below(p, axis, c, [&](const Point3& a, const Point3& b, const Point3& d) {
+      const double det = triple(a, b, d);
+      const Point3 sum = a + b + d;
+      six_v += det;
+      first += det * sum;
+      second += det * (a * a.transpose() + b * b.transpose() + d * d.transpose() + sum * sum.transpose());
+    });
+    // back from the frame of O on the plane to the cell's: x = y + O
+    Point3 origin = Point3::Zero();
+    origin[axis] = c;
+    Moments3 m;
+    m.volume = six_v / 6.0;
+    const Point3 first_y = first / 24.0;
+    m.first = first_y + m.volume * origin;
+    m.second = second / 120.0 + first_y * origin.transpose() + origin * first_y.transpose() +
+               m.volume * origin * origin.transpose();
+    return m;
+  }
+  static Moments3 difference(const Moments3& a, const Moments3& b) {
+    Moments3 d;
+    d.volume = a.volume - b.volume;
+    d.first = a.first - b.first;
+    d.second = a.second - b.second;
+    return d;
+  }
+};
+
 }  // namespace rsph::geometry

@@ -1,5 +1,5 @@
 #pragma once
-// Lattices new particles are created on: their sites and cells (the cells tile the plane or the line).
+// Lattices new particles are created on: their sites and cells (the cells tile the line, the plane or space).
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/geometry/polygon.hpp"
@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <numbers>
 #include <string>
+#include <utility>
 
 namespace rsph {
 
@@ -40,6 +41,47 @@ concept RegularizationLattice = requires(const L& l) {
 }
 &&(RegularLattice<L, L::dim> || requires(const L& l) { l.finest(); });
 
+/// What the remap asks of a lattice's cells beyond the concept: in 1D each cell's bounds; in 2D and 3D whether
+/// the cells are the boxes between grid lines (then the lines), or, in 2D, one convex shape moved to every site.
+template <class L, int D>
+constexpr bool check_lattice_cells() {
+  if constexpr (D == 1) {
+    static_assert(
+        requires(const L& l, const Box<1>& box, std::int64_t i) {
+          { l.cell(box, i) } -> std::same_as<std::pair<double, double>>;
+        },
+        "a 1D regularization lattice needs `std::pair<double, double> cell(box, i)`: the bounds of cell i");
+  } else {
+    static_assert(
+        requires {
+          { L::rectangular_cells } -> std::convertible_to<bool>;
+        },
+        "a regularization lattice needs `static constexpr bool rectangular_cells`: whether its cells are the boxes "
+        "between grid lines");
+    if constexpr (requires {
+                    { L::rectangular_cells } -> std::convertible_to<bool>;
+                  }) {
+      if constexpr (L::rectangular_cells)
+        static_assert(
+            requires(const L& l, const Box<D>& box, int axis, std::int64_t i, double origin) {
+              { l.line(box, axis, i, origin) } -> std::same_as<double>;
+            },
+            "a lattice of rectangular cells needs `double line(box, axis, index, origin)`: grid line `index` along "
+            "`axis` (cell i spans lines i and i + 1), relative to `origin`");
+      else
+        static_assert(
+            D == 2 &&
+                requires(const L& l, const Box<D>& box, std::array<std::int64_t, D> idx, const Vec<D>& origin) {
+                  { l.cell_shape() } -> std::same_as<geometry::ConvexPolygon>;
+                  { l.cell(box, idx, origin) } -> std::same_as<geometry::ConvexPolygon>;
+                },
+            "a lattice whose cells are not rectangles needs `geometry::ConvexPolygon cell_shape() const` (every cell "
+            "that shape moved to its site) and `cell(box, index, origin)`; in 3D only rectangular cells are remapped");
+    }
+  }
+  return true;
+}
+
 template <class L>
 constexpr bool check_lattice() {
   static_assert(
@@ -59,13 +101,18 @@ constexpr bool check_lattice() {
         RegularLattice<L, L::dim> || requires(const L& l) { l.finest(); },
         "a regularization lattice needs `cell_volume()`, `cells_touching(box, lo, hi)`, `site(box, index)` "
         "and `periods(box)` (one level), or `finest()` (levels in factors of two, lattice::MultiLevel)");
+  if constexpr (requires {
+                  { L::dim } -> std::convertible_to<int>;
+                })
+    if constexpr (RegularLattice<L, L::dim>) static_assert(check_lattice_cells<L, L::dim>());
   return true;
 }
 
 namespace lattice {
 
 namespace detail {
-inline std::int64_t cells_along(const Box<2>& box, int k, double pitch, const char* name) {
+template <int D>
+std::int64_t cells_along(const Box<D>& box, int k, double pitch, const char* name) {
   const double L = box.hi[k] - box.lo[k];
   const double n = L / pitch;
   const auto rounded = static_cast<std::int64_t>(std::llround(n));
@@ -73,6 +120,18 @@ inline std::int64_t cells_along(const Box<2>& box, int k, double pitch, const ch
           std::string(name) + " lattice: the box length along axis " + std::to_string(k) + " (" + std::to_string(L) +
               ") must be a whole number of lattice rows (pitch " + std::to_string(pitch) + ")");
   return rounded;
+}
+/// Cells per periodic axis of a lattice of cubes of side `spacing` (0 on other axes); every closed axis must hold
+/// a whole number of cells.
+template <int D>
+std::array<std::int64_t, D> rectangular_periods(const Box<D>& box, double spacing, const char* name) {
+  std::array<std::int64_t, D> p{};
+  for (int k = 0; k < D; ++k)
+    if (box.edge[k] != Edge::open) {
+      const auto n = cells_along(box, k, spacing, name);
+      if (box.periodic(k)) p[static_cast<std::size_t>(k)] = n;
+    }
+  return p;
 }
 }  // namespace detail
 
@@ -120,13 +179,7 @@ struct Square {
     return Vec<2>(box.lo[0] + (idx[0] + 0.5) * spacing, box.lo[1] + (idx[1] + 0.5) * spacing);
   }
   std::array<std::int64_t, 2> periods(const Box<2>& box) const {
-    std::array<std::int64_t, 2> p{0, 0};
-    for (int k = 0; k < 2; ++k)
-      if (box.edge[k] != Edge::open) {
-        const auto n = detail::cells_along(box, k, spacing, "square");
-        if (box.periodic(k)) p[static_cast<std::size_t>(k)] = n;
-      }
-    return p;
+    return detail::rectangular_periods(box, spacing, "square");
   }
   /// The cell of idx relative to `origin`.
   geometry::ConvexPolygon cell(const Box<2>& box, std::array<std::int64_t, 2> idx, const Vec<2>& origin) const {
@@ -196,6 +249,35 @@ struct Hexagonal {
     return h;
   }
   static constexpr bool rectangular_cells = false;
+};
+
+/// Cubic lattice of spacing Delta: sites at lo + ((i + 1/2) Delta, (j + 1/2) Delta, (k + 1/2) Delta), cubic cells.
+struct Cubic {
+  static constexpr int dim = 3;
+  double spacing;
+
+  double cell_volume() const { return spacing * spacing * spacing; }
+  IndexRange<3> cells_touching(const Box<3>& box, const Vec<3>& lo, const Vec<3>& hi) const {
+    IndexRange<3> r;
+    for (int k = 0; k < 3; ++k) {
+      r.lo[k] = floor_index((lo[k] - box.lo[k]) / spacing);
+      r.hi[k] = floor_index((hi[k] - box.lo[k]) / spacing);
+    }
+    return r;
+  }
+  Vec<3> site(const Box<3>& box, std::array<std::int64_t, 3> idx) const {
+    return Vec<3>(box.lo[0] + (idx[0] + 0.5) * spacing, box.lo[1] + (idx[1] + 0.5) * spacing,
+                  box.lo[2] + (idx[2] + 0.5) * spacing);
+  }
+  std::array<std::int64_t, 3> periods(const Box<3>& box) const {
+    return detail::rectangular_periods(box, spacing, "cubic");
+  }
+  /// Rectangular cells: the lattice plane `index` along `axis` (cells span planes i to i + 1), relative to
+  /// `origin`.
+  double line(const Box<3>& box, int axis, std::int64_t index, double origin) const {
+    return box.lo[axis] + static_cast<double>(index) * spacing - origin;
+  }
+  static constexpr bool rectangular_cells = true;
 };
 
 }  // namespace lattice

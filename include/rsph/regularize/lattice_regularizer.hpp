@@ -1,7 +1,7 @@
 #pragma once
 // The RSPH regularizer: a lattice, a schedule and a Voronoi cell builder; remaps with eqs. (6)-(9).
 #include "rsph/core/particle_set.hpp"
-#include "rsph/geometry/voronoi.hpp"
+#include "rsph/geometry/cell_builder.hpp"
 #include "rsph/regularize/concept.hpp"
 #include "rsph/regularize/lattice.hpp"
 #include "rsph/regularize/multilevel.hpp"
@@ -32,6 +32,7 @@ void checkpoint_log(Archive& ar, std::vector<Record>& log) {
   std::size_t n = log.size();
   ar("count", n);
   log.resize(n);
+  // one column per figure of RemapStats, beside the record's own step, time and seconds
   auto column = [&](const char* name, auto get) {
     using T = std::decay_t<decltype(get(log.front()))>;
     std::vector<T> c(n);
@@ -46,26 +47,10 @@ void checkpoint_log(Archive& ar, std::vector<Record>& log) {
       "time", [](Record & r) -> auto& { return r.time; });
   column(
       "seconds", [](Record & r) -> auto& { return r.seconds; });
-  column(
-      "n_before", [](Record & r) -> auto& { return r.stats.n_before; });
-  column(
-      "n_after", [](Record & r) -> auto& { return r.stats.n_after; });
-  column(
-      "kinetic_converted", [](Record & r) -> auto& { return r.stats.kinetic_converted; });
-  column(
-      "max_volume_mismatch", [](Record & r) -> auto& { return r.stats.max_volume_mismatch; });
-  column(
-      "dropped_cells", [](Record & r) -> auto& { return r.stats.dropped_cells; });
-  column(
-      "capped_blocks", [](Record & r) -> auto& { return r.stats.capped_blocks; });
-  column(
-      "requested_level", [](Record & r) -> auto& { return r.stats.requested_level; });
-  column(
-      "first_order_cells", [](Record & r) -> auto& { return r.stats.first_order_cells; });
-  column(
-      "passes", [](Record & r) -> auto& { return r.stats.passes; });
-  column(
-      "limited_cells", [](Record & r) -> auto& { return r.stats.limited_cells; });
+  RemapStats::for_each_figure([&](const char* name, auto figure) {
+    column(
+        name, [figure](Record & r) -> auto& { return r.stats.*figure; });
+  });
   std::vector<std::size_t> levels, per_level;  // the per-level counts, flattened
   for (const auto& r : log) {
     levels.push_back(r.stats.per_level.size());
@@ -84,26 +69,37 @@ void checkpoint_log(Archive& ar, std::vector<Record>& log) {
   }
 }
 
-template <class Lattice, class Schedule, class Builder = geometry::LocalVoronoi, class Region = region::Unbounded,
-          class Order = FirstOrder>
+/// A lattice regularizer's options besides its lattice and schedule, named where they are given:
+/// `{.remap = {1.4}, .region = region::Annulus{0.4, 2.5}, .order = regularize::SecondOrder{}}`.
+template <class Builder, class Region, class Order>
+struct RegularizerOptions {
+  RemapParams remap{};
+  Builder builder{};
+  Region region{};
+  Order order{};
+};
+
+template <class Lattice, class Schedule, class Builder = typename geometry::DefaultCellBuilder<Lattice::dim>::type,
+          class Region = region::Unbounded, class Order = FirstOrder>
 class LatticeRegularizer {
   static_assert(check_lattice<Lattice>());
-  static_assert(geometry::check_cell_builder<Builder>());
-  static_assert(check_closing_region<Region>());
+  static_assert(geometry::check_cell_builder<Builder, Lattice::dim>());
+  static_assert(check_closing_region<Region, Lattice::dim>());
   static_assert(check_remap_order<Order>());
 
  public:
   /// The driver hands the schedule n_a of eq. (A1) from its density pass (StepInfo::number_density).
   static constexpr bool wants_number_density = requires { requires Schedule::wants_number_density; };
 
-  explicit LatticeRegularizer(Lattice lattice, Schedule schedule, RemapParams params = {}, Builder builder = {},
-                              Region region = {}, Order order = {})
+  using Options = RegularizerOptions<Builder, Region, Order>;
+
+  explicit LatticeRegularizer(Lattice lattice, Schedule schedule, Options options = {})
       : lattice_(std::move(lattice)),
         schedule_(std::move(schedule)),
-        params_(params),
-        builder_(std::move(builder)),
-        region_(std::move(region)),
-        order_(order) {}
+        params_(options.remap),
+        builder_(std::move(options.builder)),
+        region_(std::move(options.region)),
+        order_(std::move(options.order)) {}
 
   void validate() const {
     params_.validate();
@@ -129,10 +125,7 @@ class LatticeRegularizer {
     Record r;
     r.step = s.step;
     r.time = s.time;
-    if constexpr (Order::order == 2)
-      r.stats = remap_second_order(p, box, lattice_, builder_, params_, order_.params, region_, &workspace_, &second_);
-    else
-      r.stats = remap_onto_lattice(p, box, lattice_, builder_, params_, region_, &workspace_);
+    r.stats = order_.remap(p, box, lattice_, builder_, params_, region_, workspace_, order_workspace_);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     log_.push_back(r);
     return r.stats.kinetic_converted;
@@ -153,6 +146,11 @@ class LatticeRegularizer {
   const RemapParams& params() const { return params_; }
   /// "first" or "second": the remap's order, for the records a run writes.
   static constexpr const char* remap_order() { return Order::name; }
+  /// The figures the remap's order reports over the run's remaps: set(name, value) for each.
+  template <class Set>
+  void order_figures(Set&& set) const {
+    Order::figures(log_, set);
+  }
 
  private:
   Lattice lattice_;
@@ -162,9 +160,7 @@ class LatticeRegularizer {
   Region region_;
   Order order_;
   RemapWorkspace<Lattice::dim> workspace_;
-  struct NoWorkspace {};
-  [[no_unique_address]] std::conditional_t<Order::order == 2, second_order::Workspace<Lattice::dim>, NoWorkspace>
-      second_;
+  [[no_unique_address]] typename Order::template Workspace<Lattice::dim> order_workspace_;
   std::vector<Record> log_;
 };
 

@@ -3,6 +3,7 @@
 #include "rsph/core/errors.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/kernel/kernel.hpp"
+#include "rsph/kernel/lattice_sum.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
 #include "rsph/regularize/concept.hpp"
 
@@ -67,6 +68,20 @@ struct Adaptive {
       return std::numbers::pi * R * R;
     else
       return 4.0 / 3.0 * std::numbers::pi * R * R * R;
+  }
+
+  /// N_a of eq. (A2) on a regular Cartesian lattice (square, cubic) at the given h/Delta: V(h) / Delta^D times
+  /// the lattice sum of W without the particle itself (eq. A1). In 2D it gives the paper's pairs: 9.5 at h/Delta
+  /// = 1.1, 308 at 5.0 (§3.2), 4.5 at 0.9 and 107 at 3.0 (§5); in 3D the same h/Delta give other numbers.
+  static double lattice_neighbour_number(double h_over_dx) {
+    const double self = kernel::W<Kernel, D>(0.0, h_over_dx);  // Delta = 1
+    return interaction_volume(h_over_dx) * (kernel::lattice_sum<Kernel, D>(h_over_dx) - self);
+  }
+  /// The schedule whose bounds are the neighbour numbers of a lattice at h/Delta = h_min and h_max: Appendix A
+  /// in any dimension from the paper's h/Delta.
+  static Adaptive for_h_over_dx(double h_min, double h_max, double dn_max, std::uint64_t steps_cap) {
+    require(h_min > 0.0 && h_max > h_min, "adaptive regularization: need 0 < h/Delta min < h/Delta max");
+    return Adaptive(lattice_neighbour_number(h_min), lattice_neighbour_number(h_max), dn_max, steps_cap);
   }
 
   /// N_a of eq. (A2) for the real particles, from the current neighbour lists.

@@ -15,6 +15,7 @@
 // (Barth-Jespersen) so that no vertex of the cell leaves the range of the cell and its neighbours.
 #include "rsph/regularize/remap.hpp"
 #include "rsph/regularize/second_order/cells.hpp"
+#include "rsph/regularize/second_order/cells3d.hpp"
 #include "rsph/regularize/second_order/reconstruction.hpp"
 
 #include <array>
@@ -85,7 +86,8 @@ struct HandOutScratch {
 template <int D>
 struct Workspace {
   CellStore<D> cells;
-  CellsByThread by_thread;
+  CellsByThread by_thread;        ///< 2D
+  FacesByThread faces_by_thread;  ///< 3D
   neighbors::CellList<D> lookup;
   std::vector<Reconstruction<D>> recon;
   std::vector<std::uint8_t> first_order, bad;
@@ -227,7 +229,8 @@ void hand_out(const OldCell<D>& o, std::span<const std::size_t> flat, std::span<
   }
   r.limited = phi < 1.0;
   for (std::size_t k = 0; k < n; ++k)
-    sums.add_share(flat[k], pc.m[k], pc.m[k] * o.v + G_v * pc.W[k], pc.m[k] * o.e + g_e.dot(pc.W[k]), moments[k].area);
+    sums.cell[flat[k]] +=
+        Conserved<D>{pc.m[k], Vec<D>(pc.m[k] * o.v + G_v * pc.W[k]), pc.m[k] * o.e + g_e.dot(pc.W[k]), moments[k].area};
 }
 
 /// Calls f(flat index, moments) for every piece of the 2D old cell `cell` (relative to its particle at xo)
@@ -299,30 +302,21 @@ OldCell<D> old_cell(const ParticleSet<D, E>& p, std::vector<Reconstruction<D>>& 
   return o;
 }
 
-/// Lists every old cell's pieces (kept per thread for the hand-outs) and, with `limit`, each new cell's bounds:
-/// the union of the ranges of the old cells with a piece in it, into ws.bounds[0].
+/// Lists every old cell's pieces (kept per thread for the hand-outs) in 1D and 2D; 3D cells list theirs as
+/// they are built (cells3d.hpp).
 template <class Lattice, int D, bool E>
 void list_pieces(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
-                 bool limit, const detail::CellGrid<D>& grid, Workspace<D>& ws) {
+                 const detail::CellGrid<D>& grid, Workspace<D>& ws) {
   const auto n_threads = static_cast<std::size_t>(max_threads());
   ws.threads.resize(n_threads);
   ws.piece_thread.resize(p.n_real);
   ws.piece_first.resize(p.n_real);
   ws.piece_count.resize(p.n_real);
-  if (limit) {
-    ws.bounds.resize(n_threads);
-    run_parallel(n_threads, [&](int, std::size_t begin, std::size_t end) {
-      for (std::size_t t = begin; t < end; ++t) ws.bounds[t].assign(grid.n_cells, FieldRanges<D>{});
-    });
-  }
   auto listed = [&](int t, std::size_t a, std::size_t first) {
-    const auto tt = static_cast<std::size_t>(t);
-    const auto& own = ws.threads[tt].pieces;
+    const auto& own = ws.threads[static_cast<std::size_t>(t)].pieces;
     ws.piece_thread[a] = static_cast<std::uint32_t>(t);
     ws.piece_first[a] = static_cast<std::uint32_t>(first);
     ws.piece_count[a] = static_cast<std::uint32_t>(own.flat.size() - first);
-    if (limit)
-      for (std::size_t k = first; k < own.flat.size(); ++k) ws.bounds[tt][own.flat[k]].add(ws.recon[a].range);
   };
   for (auto& t : ws.threads) t.pieces.clear();
   if constexpr (D == 1) {
@@ -352,11 +346,29 @@ void list_pieces(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& l
       }
     });
   }
-  if (limit)
-    run_parallel(grid.n_cells, [&](int, std::size_t begin, std::size_t end) {
-      for (std::size_t t = 1; t < ws.bounds.size(); ++t)
-        for (std::size_t c = begin; c < end; ++c) ws.bounds[0][c].add(ws.bounds[t][c]);
-    });
+}
+
+/// Each new cell's bounds: the union of the ranges of the old cells with a piece in it, into ws.bounds[0] (a
+/// union of ranges, the same in any order).
+template <int D>
+void gather_bounds(std::size_t n_old, std::size_t n_cells, Workspace<D>& ws) {
+  const auto n_threads = static_cast<std::size_t>(max_threads());
+  ws.bounds.resize(n_threads);
+  run_parallel(n_threads, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t) ws.bounds[t].assign(n_cells, FieldRanges<D>{});
+  });
+  run_parallel(n_old, [&](int t, std::size_t begin, std::size_t end) {
+    auto& own = ws.bounds[static_cast<std::size_t>(t)];
+    for (std::size_t a = begin; a < end; ++a) {
+      const auto& listed = ws.threads[ws.piece_thread[a]].pieces;
+      for (std::size_t k = ws.piece_first[a], last = k + ws.piece_count[a]; k < last; ++k)
+        own[listed.flat[k]].add(ws.recon[a].range);
+    }
+  });
+  run_parallel(n_cells, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t t = 1; t < ws.bounds.size(); ++t)
+      for (std::size_t c = begin; c < end; ++c) ws.bounds[0][c].add(ws.bounds[t][c]);
+  });
 }
 
 /// One pass over the old cells' pieces: every piece's shares into the per-thread sums (reduced into
@@ -394,12 +406,13 @@ void hand_out_all(const ParticleSet<D, E>& p, bool limit, std::size_t n_cells, W
 template <int D>
 std::size_t mark_cold_cells(const detail::Sums<D>& S, const std::vector<double>& u_min, double floor,
                             std::vector<std::uint8_t>& bad) {
-  bad.assign(S.m.size(), 0);
+  bad.assign(S.size(), 0);
   std::size_t n = 0;
-  for (std::size_t c = 0; c < S.m.size(); ++c) {
-    if (!(S.m[c] > 0.0)) continue;
-    const Vec<D> v = S.mv[c] / S.m[c];
-    const double u = S.E[c] / S.m[c] - 0.5 * v.squaredNorm();
+  for (std::size_t c = 0; c < S.size(); ++c) {
+    const Conserved<D>& sum = S.cell[c];
+    if (!(sum.m > 0.0)) continue;
+    const Vec<D> v = sum.mv / sum.m;
+    const double u = sum.E / sum.m - 0.5 * v.squaredNorm();
     bad[c] = u < floor * u_min[c];
     n += bad[c];
   }
@@ -452,12 +465,15 @@ detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box
                                    Workspace<D>& w2, RemapStats& stats) {
   if constexpr (D == 1)
     collect_cells(p, box, lattice, params, grid, w2.cells);
-  else
+  else if constexpr (D == 2)
     collect_cells(p, box, builder, params, region, ws.closing, w2.by_thread, w2.lookup, w2.cells);
+  else
+    collect_cells_and_pieces(p, box, lattice, builder, params, region, grid, ws.closing, w2);
   w2.recon.resize(p.n_real);
   reconstruct_density(p, w2.cells, w2.recon);
   reconstruct_motion(p, w2.cells, w2.recon);
-  list_pieces(p, box, lattice, params, second.limit, grid, w2);
+  if constexpr (D < 3) list_pieces(p, box, lattice, params, grid, w2);
+  if (second.limit) gather_bounds(p.n_real, grid.n_cells, w2);
   w2.first_order.assign(p.n_real, 0);
   hand_out_above_floor(p, second, grid.n_cells, ws, w2, stats);
   for (const auto& r : w2.recon) stats.limited_cells += r.limited;
@@ -474,8 +490,8 @@ template <class Lattice, class Builder, int D, bool E, class Region = region::Un
 RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
                               const RemapParams& params, const SecondOrderParams& second, const Region& region = {},
                               RemapWorkspace<D>* workspace = nullptr, second_order::Workspace<D>* ws2 = nullptr) {
-  static_assert(check_closing_region<Region>());
-  static_assert(D == 2 || !Region::clips, "closing regions are two-dimensional");
+  static_assert(check_closing_region<Region, D>());
+  static_assert(D > 1 || !Region::clips, "closing regions are for 2D and 3D cells");
   detail::check_remap_input(p, lattice, params);
   second.validate();
   RemapWorkspace<D> local;

@@ -1,0 +1,148 @@
+#pragma once
+// The block of lattice cells a remap sums into: its index ranges, flat indices with periodic wrapping and
+// wall clamping, and the candidate cells a particle set can reach. The same in every dimension.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
+#include "rsph/core/particle_set.hpp"
+#include "rsph/regularize/lattice.hpp"
+#include "rsph/regularize/remap_params.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <type_traits>
+#include <utility>
+
+namespace rsph::regularize::detail {
+
+/// An old cell's overlap with one new cell: (flat index of the new cell, Omega_n^o).
+using Overlap = std::pair<std::size_t, double>;
+
+inline std::int64_t wrap_index(std::int64_t i, std::int64_t period) {
+  if (i >= 0 && i < period) return i;  // almost always: spare the integer division
+  if (i >= period && i < 2 * period) return i - period;
+  if (i < 0 && i >= -period) return i + period;
+  i %= period;
+  return i < 0 ? i + period : i;
+}
+
+/// The dense block of candidate new cells a remap accumulates into: an index range per axis, wrapped
+/// on periodic axes.
+template <int D>
+struct CellGrid {
+  IndexRange<D> range;
+  std::array<std::int64_t, D> count{}, periods{};
+  std::size_t n_cells = 0;
+
+  /// Flat index of a cell, wrapping periodic axes; -1 outside the grid.
+  std::int64_t flat(std::array<std::int64_t, D> idx) const {
+    std::int64_t f = 0;
+    for (int k = D - 1; k >= 0; --k) {
+      const auto kk = static_cast<std::size_t>(k);
+      std::int64_t i = idx[kk];
+      if (periods[kk] > 0) i = wrap_index(i, periods[kk]);
+      i -= range.lo[kk];
+      if (i < 0 || i >= count[kk]) return -1;
+      f = f * count[kk] + i;
+    }
+    return f;
+  }
+  /// One integer division per axis but the last (f lies in the grid): the new set asks this of every cell.
+  std::array<std::int64_t, D> unflat(std::size_t f) const {
+    std::array<std::int64_t, D> idx;
+    for (int k = 0; k + 1 < D; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
+      const std::size_t rest = f / static_cast<std::size_t>(count[kk]);
+      idx[kk] = range.lo[kk] + static_cast<std::int64_t>(f - rest * static_cast<std::size_t>(count[kk]));
+      f = rest;
+    }
+    idx[D - 1] = range.lo[D - 1] + static_cast<std::int64_t>(f);
+    return idx;
+  }
+};
+
+/// The candidate cells: the whole box on closed axes, the particles' extent plus the closing radius on
+/// open ones, there rounded out to whole multiples of `align` cells (counted from box.lo).
+template <class Lattice, int D, bool E>
+CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
+                           const RemapParams& params, std::int64_t align = 1) {
+  CellGrid<D> g;
+  g.periods = lattice.periods(box);
+  const std::size_t n_old = p.n_real;
+  Vec<D> lo, hi;
+  double max_h = 0.0;
+  for (std::size_t a = 0; a < n_old; ++a) max_h = std::max(max_h, p.h[a]);
+  for (int k = 0; k < D; ++k) {
+    if (box.edge[k] == Edge::open) {
+      lo[k] = std::numeric_limits<double>::max();
+      hi[k] = std::numeric_limits<double>::lowest();
+      for (std::size_t a = 0; a < n_old; ++a) {
+        lo[k] = std::min(lo[k], p.x[a][k]);
+        hi[k] = std::max(hi[k], p.x[a][k]);
+      }
+      lo[k] -= params.closing_radius_in_h * max_h * 1.1;
+      hi[k] += params.closing_radius_in_h * max_h * 1.1;
+    } else {
+      lo[k] = box.lo[k];
+      hi[k] = box.hi[k];
+    }
+  }
+  g.range = lattice.cells_touching(box, lo, hi);
+  g.n_cells = 1;
+  for (int k = 0; k < D; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    if (g.periods[kk] > 0) {
+      g.range.lo[kk] = 0;
+      g.range.hi[kk] = g.periods[kk] - 1;
+    } else if (box.edge[k] == Edge::reflecting) {
+      // rows whose sites lie inside the walls
+      while (lattice.site(box, g.range.lo)[k] < box.lo[k]) ++g.range.lo[kk];
+      auto top = g.range.lo;
+      top[kk] = g.range.hi[kk];
+      while (lattice.site(box, top)[k] > box.hi[k]) top[kk] = --g.range.hi[kk];
+    } else if (align > 1) {
+      auto floor_div = [](std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
+      g.range.lo[kk] = floor_div(g.range.lo[kk], align) * align;
+      g.range.hi[kk] = (floor_div(g.range.hi[kk], align) + 1) * align - 1;
+    }
+    g.count[kk] = g.range.hi[kk] - g.range.lo[kk] + 1;
+    g.n_cells *= static_cast<std::size_t>(g.count[kk]);
+  }
+  // The sums take (3 + D) doubles per cell and thread: refuse a grid that would not fit rather than ask for it.
+  const double gib = static_cast<double>(g.n_cells) * static_cast<double>((3 + D) * sizeof(double)) *
+                     static_cast<double>(std::max(1, max_threads())) / double(1u << 30);
+  require(g.n_cells < (std::size_t{1} << 31) && gib <= 4.0,
+          "regularization: the particles span " + std::to_string(g.n_cells) + " lattice cells (" +
+              std::to_string(n_old) + " particles; the remap's sums would take " + std::to_string(gib) +
+              " GiB): a particle far from the rest on an open axis?");
+  return g;
+}
+
+/// Axis k's part of the flat index of lattice index i in `grid`: wrapped on periodic axes, clamped at
+/// walls (a round-off sliver beyond a wall); -1 outside the grid.
+template <int D>
+std::int64_t axis_part(const CellGrid<D>& grid, const Box<D>& box, int k, std::int64_t i) {
+  const auto kk = static_cast<std::size_t>(k);
+  if (grid.periods[kk] > 0) i = wrap_index(i, grid.periods[kk]);
+  i -= grid.range.lo[kk];
+  if (box.edge[k] == Edge::reflecting) i = std::clamp<std::int64_t>(i, 0, grid.count[kk] - 1);
+  if (i < 0 || i >= grid.count[kk]) return -1;
+  for (int m = 0; m < k; ++m) i *= grid.count[static_cast<std::size_t>(m)];
+  return i;
+}
+/// Whether lattice index idx lies beyond a wall (outside the grid along a reflecting axis).
+template <int D>
+bool beyond_wall(const CellGrid<D>& grid, const Box<D>& box, std::type_identity_t<std::array<std::int64_t, D>> idx) {
+  for (int k = 0; k < D; ++k) {
+    const auto kk = static_cast<std::size_t>(k);
+    if (box.edge[k] == Edge::reflecting &&
+        (idx[kk] < grid.range.lo[kk] || idx[kk] >= grid.range.lo[kk] + grid.count[kk]))
+      return true;
+  }
+  return false;
+}
+
+}  // namespace rsph::regularize::detail

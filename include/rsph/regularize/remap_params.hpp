@@ -1,0 +1,93 @@
+#pragma once
+// What a remap is told (its parameters), what it carries from old cells to new ones, and what it reports (its
+// statistics), in every dimension.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace rsph::regularize {
+
+struct RemapParams {
+  double h_over_dx = 1.2;  ///< new h = (h/Delta) Delta
+  /// A new cell covered by old cells over less than this fraction of its area gets no particle; its
+  /// share goes to the fullest neighbouring cell, so mass stays exactly conserved.
+  double min_fill = 1e-9;
+  /// Open edges: an old cell is closed by a disc of this radius in units of the particle's h.
+  double closing_radius_in_h = 2.0;
+  /// A new cell whose mass is below this fraction of the largest new mass is handed on like a nearly
+  /// empty one: it keeps far tails of an open flow from spawning particles of negligible mass.
+  double min_mass_ratio = 0.0;
+
+  void validate() const {
+    require(h_over_dx > 0.0, "regularization: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
+    require(min_fill >= 0.0 && min_fill < 1.0, "regularization: min_fill must lie in [0, 1)");
+    require(closing_radius_in_h > 0.0, "regularization: the closing radius must be positive");
+    require(min_mass_ratio >= 0.0 && min_mass_ratio < 1.0, "regularization: min_mass_ratio must lie in [0, 1)");
+  }
+};
+
+/// What a remap carries into one new cell: mass (eq. 6), momentum (eq. 8), total energy m (e + v^2/2) (eq. 9
+/// plus the kinetic energy, so that total energy is conserved) and the volume of the old cells that cover it.
+template <int D>
+struct Conserved {
+  double m = 0.0;
+  Vec<D> mv = Vec<D>::Zero();
+  double E = 0.0;
+  double volume = 0.0;
+
+  Conserved& operator+=(const Conserved& o) {
+    m += o.m;
+    mv += o.mv;
+    E += o.E;
+    volume += o.volume;
+    return *this;
+  }
+};
+
+/// What one regularization did.
+struct RemapStats {
+  std::size_t n_before = 0, n_after = 0;
+  double kinetic_converted = 0.0;    ///< kinetic energy turned into heat (or dissipated, without u)
+  double max_volume_mismatch = 0.0;  ///< max over old cells of |sum_n Omega_n^o - V_o| / V_o
+  std::size_t dropped_cells = 0;     ///< nearly empty new cells whose share was handed on
+  /// New particles per resolution level (one entry on a uniform lattice).
+  std::vector<std::size_t> per_level;
+  /// Multi-level lattices: blocks whose criterion asked for more than the finest level, and the level asked.
+  std::size_t capped_blocks = 0;
+  int requested_level = 0;
+  /// Second-order remap: old cells handed out at first order because a new particle they feed would have
+  /// fallen below the thermal floor, and the passes over the overlaps that took (1 when none fell).
+  std::size_t first_order_cells = 0;
+  int passes = 1;
+  /// Second-order remap: old cells whose gradient the limiter cut (phi < 1 for rho, a velocity component or e).
+  std::size_t limited_cells = 0;
+
+  /// Calls f(name, &RemapStats::field) for every scalar figure, in one fixed order: what a log saves, restores
+  /// and totals iterates (per_level, a list, is left to its owners).
+  template <class F>
+  static void for_each_figure(F&& f) {
+    f("n_before", &RemapStats::n_before);
+    f("n_after", &RemapStats::n_after);
+    f("kinetic_converted", &RemapStats::kinetic_converted);
+    f("max_volume_mismatch", &RemapStats::max_volume_mismatch);
+    f("dropped_cells", &RemapStats::dropped_cells);
+    f("capped_blocks", &RemapStats::capped_blocks);
+    f("requested_level", &RemapStats::requested_level);
+    f("first_order_cells", &RemapStats::first_order_cells);
+    f("passes", &RemapStats::passes);
+    f("limited_cells", &RemapStats::limited_cells);
+  }
+};
+
+/// The sum of one figure over a log of records holding RemapStats as `stats`.
+template <class Log, class T>
+T total(const Log& log, T RemapStats::*figure) {
+  T sum{};
+  for (const auto& r : log) sum += r.stats.*figure;
+  return sum;
+}
+
+}  // namespace rsph::regularize
