@@ -2,15 +2,21 @@
 // Boost.Polygon) and the full remap (cells, overlaps, new particles), on a jittered lattice and on a
 // lattice sheared as by Keplerian rotation, and the full remap against the jitter's amplitude (the cost of
 // disorder), a Keplerian disk with open edges as the planet-disk test remaps it, and the remap onto a hexagonal
-// lattice; and the second-order remap (remap_second/...) on the sets of remap/.... items_per_second = old
-// particles per second.
+// lattice; and the second-order remap (remap_second/...) on the sets of remap/.... In 3D: the remap of a
+// jittered or sheared cubic lattice (remap3d/..., remap3d_second/...), its Voronoi cells alone (cells_local3d/...) and,
+// when voro++ is installed, the same cells by voro++ alone (cells_voro/...). items_per_second = old particles per
+// second.
 #include "rsph/rsph.hpp"
 
 #include "bench_common.hpp"
 #include "remap_sets.hpp"
 
 #include <benchmark/benchmark.h>
+#ifdef RSPH_HAVE_VORO
+#include <voro++/voro++.hh>
+#endif
 
+#include <initializer_list>
 #include <numbers>
 #include <random>
 #include <string>
@@ -41,23 +47,18 @@ void BM_cells(benchmark::State& state) {
 
 /// Times remaps of p0 onto `lattice` in `box`, cells closed by `region`, of the given order; returns the new
 /// particle count.
-template <class Order = regularize::FirstOrder, class Lattice, bool E, class Region = region::Unbounded>
-std::size_t time_remaps(benchmark::State& state, const ParticleSet<2, E>& p0, Lattice& lattice,
-                        const Box<2>& box = domain(), const regularize::RemapParams& params = {},
+template <class Order = regularize::FirstOrder, class Lattice, int D, bool E, class Region = region::Unbounded>
+std::size_t time_remaps(benchmark::State& state, const ParticleSet<D, E>& p0, Lattice& lattice,
+                        const Box<D>& box = domain(), const regularize::RemapParams& params = {},
                         const Region& region = {}) {
   // As in a run: the builder and the workspaces persist from remap to remap, and so does the particle
   // storage (copy-assigned, not reallocated).
-  geometry::LocalVoronoi builder;
-  regularize::RemapWorkspace<2> workspace;
-  regularize::second_order::Workspace<2> second;
+  typename geometry::DefaultCellBuilder<D>::type builder;
+  regularize::RemapWorkspace<D> workspace;
+  typename Order::template Workspace<D> order_workspace;
   std::size_t n_after = 0;
   auto p = p0;
-  auto remap = [&] {
-    if constexpr (Order::order == 2)
-      return regularize::remap_second_order(p, box, lattice, builder, params, {}, region, &workspace, &second);
-    else
-      return regularize::remap_onto_lattice(p, box, lattice, builder, params, region, &workspace);
-  };
+  auto remap = [&] { return Order{}.remap(p, box, lattice, builder, params, region, workspace, order_workspace); };
   remap();  // untimed: the first remap faults in the storage every later one reuses
   for (auto _ : state) {
     state.PauseTiming();
@@ -165,16 +166,64 @@ void BM_remap_hexagonal(benchmark::State& state) {
   time_remaps(state, s.p, hexagonal, s.box);
 }
 
+// 3D: the remap of a cubic lattice, jittered or sheared (remap_sets.hpp), onto a cubic lattice.
+template <class Order = regularize::FirstOrder>
+void BM_remap3d(benchmark::State& state) {
+  bench::use_threads(state);
+  const auto p0 = bench::make_set3(state.range(0), static_cast<int>(state.range(1)));
+  lattice::Cubic cubic{spacing_of(p0)};
+  time_remaps<Order>(state, p0, cubic, bench::domain3());
+}
+
+// 3D: all Voronoi cells of the same sets by LocalVoronoi3 (cells and volumes, no lattice).
+void BM_cells_local3d(benchmark::State& state) {
+  bench::use_threads(state);
+  const auto p = bench::make_set3(state.range(0), static_cast<int>(state.range(1)));
+  geometry::LocalVoronoi3 builder;
+  double total = geometry::cell_volumes(builder, p.x, bench::domain3())[0];  // untimed: fault in the storage
+  for (auto _ : state) total = geometry::cell_volumes(builder, p.x, bench::domain3())[0];
+  benchmark::DoNotOptimize(total);
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.n_real));
+  state.SetComplexityN(static_cast<std::int64_t>(p.n_real));
+}
+
+#ifdef RSPH_HAVE_VORO
+// 3D: the same sets' Voronoi cells by voro++ alone (a container periodic in x and y, walled in z, about five
+// particles per block as its documentation advises; every cell computed and its volume taken). voro++ 0.4.6
+// runs on one thread.
+void BM_cells_voro(benchmark::State& state) {
+  const auto p = bench::make_set3(state.range(0), static_cast<int>(state.range(1)));
+  const int blocks = std::max(1, static_cast<int>(std::lround(std::cbrt(static_cast<double>(p.n_real) / 5.0))));
+  double total = 0.0;
+  for (auto _ : state) {
+    voro::container con(0.0, 1.0, 0.0, 1.0, 0.0, 1.0, blocks, blocks, blocks, true, true, false, 8);
+    for (std::size_t a = 0; a < p.n_real; ++a) con.put(static_cast<int>(a), p.x[a][0], p.x[a][1], p.x[a][2]);
+    voro::c_loop_all loop(con);
+    voro::voronoicell cell;
+    total = 0.0;
+    if (loop.start()) do
+        if (con.compute_cell(cell, loop)) total += cell.volume();
+      while (loop.inc());
+    benchmark::DoNotOptimize(total);
+  }
+  state.counters["volume"] = total;
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(p.n_real));
+  state.SetComplexityN(static_cast<std::int64_t>(p.n_real));
+}
+#endif
+
 // One family per (layout, threads), so each complexity fit sees one scaling curve in N.
 // Arguments: {particles, layout (0 jittered, 1 sheared), threads (0: all)}.
 template <class Fn>
-void register_family(const std::string& name, Fn fn) {
+void register_family(const std::string& name, Fn fn,
+                     std::initializer_list<std::int64_t> sizes = {1000, 10000, 100000, 1000000},
+                     std::initializer_list<int> threads = {1, 0}) {
   for (int layout : {jittered, sheared})
-    for (int t : {1, 0}) {
+    for (int t : threads) {
       const std::string family =
           name + (layout == jittered ? "/jittered" : "/sheared") + (t == 1 ? "/1thread" : "/allthreads");
       auto* b = benchmark::RegisterBenchmark(family.c_str(), fn);
-      for (std::int64_t n : {1000, 10000, 100000, 1000000}) b->Args({n, layout, t});
+      for (std::int64_t n : sizes) b->Args({n, layout, t});
       b->Unit(benchmark::kMillisecond)->UseRealTime()->Complexity(benchmark::oN);
     }
 }
@@ -188,6 +237,12 @@ int main(int argc, char** argv) {
   register_family("remap_second", BM_remap<regularize::SecondOrder>);
   register_family("remap_two_levels", BM_remap_two_levels);
   register_family("remap_hexagonal", BM_remap_hexagonal);
+  register_family("remap3d", BM_remap3d<>, {10000, 100000, 1000000});
+  register_family("remap3d_second", BM_remap3d<regularize::SecondOrder>, {10000, 100000, 1000000});
+  register_family("cells_local3d", BM_cells_local3d, {10000, 100000, 1000000});
+#ifdef RSPH_HAVE_VORO
+  register_family("cells_voro", BM_cells_voro, {10000, 100000, 1000000}, {1});
+#endif
   for (int t : {1, 0}) {
     auto* b = benchmark::RegisterBenchmark(t == 1 ? "remap_disorder/1thread" : "remap_disorder/allthreads",
                                            BM_remap_disorder);

@@ -9,6 +9,7 @@ packages=(
   libfmt-dev catch2 libbenchmark-dev libhdf5-dev
   python3 python3-matplotlib python3-numpy python3-h5py python3-meshio
   clang-format
+  voro++-dev
 )
 
 missing=()
