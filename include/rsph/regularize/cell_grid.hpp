@@ -65,7 +65,8 @@ struct CellGrid {
 };
 
 /// The candidate cells: the whole box on closed axes, the particles' extent plus the closing radius on
-/// open ones, there rounded out to whole multiples of `align` cells (counted from box.lo).
+/// open ones, there rounded out to whole multiples of `align` cells (counted from box.lo). Only an index
+/// range: a remap sums into it densely or, where it holds many cells per particle, sparsely (sums.hpp).
 template <class Lattice, int D, bool E>
 CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
                            const RemapParams& params, std::int64_t align = 1) {
@@ -91,7 +92,7 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
     }
   }
   g.range = lattice.cells_touching(box, lo, hi);
-  g.n_cells = 1;
+  double cells = 1.0;  // as a double first: an extent of many cells cannot overflow the count
   for (int k = 0; k < D; ++k) {
     const auto kk = static_cast<std::size_t>(k);
     if (g.periods[kk] > 0) {
@@ -109,15 +110,11 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
       g.range.hi[kk] = (floor_div(g.range.hi[kk], align) + 1) * align - 1;
     }
     g.count[kk] = g.range.hi[kk] - g.range.lo[kk] + 1;
-    g.n_cells *= static_cast<std::size_t>(g.count[kk]);
+    cells *= static_cast<double>(g.count[kk]);
   }
-  // The sums take (3 + D) doubles per cell and thread: refuse a grid that would not fit rather than ask for it.
-  const double gib = static_cast<double>(g.n_cells) * static_cast<double>((3 + D) * sizeof(double)) *
-                     static_cast<double>(std::max(1, max_threads())) / double(1u << 30);
-  require(g.n_cells < (std::size_t{1} << 31) && gib <= 4.0,
-          "regularization: the particles span " + std::to_string(g.n_cells) + " lattice cells (" +
-              std::to_string(n_old) + " particles; the remap's sums would take " + std::to_string(gib) +
-              " GiB): a particle far from the rest on an open axis?");
+  require(cells < 0x1p62, "regularization: the particles span " + std::to_string(cells) + " lattice cells (" +
+                              std::to_string(n_old) + " particles), more than flat indices can number");
+  g.n_cells = static_cast<std::size_t>(cells);
   return g;
 }
 

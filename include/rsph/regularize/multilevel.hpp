@@ -226,7 +226,7 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
   }
   const std::size_t n_cells = fp.size();
   Sums<D> cells;  // each new cell's sums: those of its finest cells
-  cells.resize(n_cells);
+  cells.reset(n_cells, false);
   for (std::size_t f = 0; f < grid.n_cells; ++f) cells.cell[fp.owner[f]] += S->cell[f];
   std::vector<double> cell_volume(n_cells);
   for (std::size_t c = 0; c < n_cells; ++c) cell_volume[c] = std::pow(ml.spacing_at(fp.level[c]), D);
@@ -259,7 +259,7 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
       p, box, ml, builder, params, region, ws, grid,
       [&](const detail::CellGrid<D>& g, RemapStats&) -> detail::Sums<D>& {
         // remap_face_cells picks the old cells to build again by their reach
-        return detail::accumulate_overlaps(p, box, fine, builder, params, g, region, ws, ml.max_level > 0);
+        return detail::accumulate_overlaps(p, box, fine, builder, params, g, region, ws, ml.max_level > 0, false);
       },
       [&](const auto&, const detail::Faces&, RemapStats&) -> detail::Sums<D>& { return ws.sums[0]; });
 }

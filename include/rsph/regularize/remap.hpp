@@ -74,7 +74,7 @@ struct AddToSums {
   const ParticleSet<D, E>* p;
   std::vector<double>* reach;  ///< null unless asked for
   void restart() {
-    for (auto& s : *sums) s.resize(s.size());
+    for (auto& s : *sums) s.reset(s.size(), s.sparse);
   }
   template <class Cell>
   void operator()(int thread, std::size_t a, const Cell& cell, std::span<const Overlap> ov, double V_o,
@@ -92,17 +92,20 @@ struct AddToSums {
 
 /// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
 /// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
-/// The sums land in workspace.sums[0]. With `record_reach` (2D), workspace.reach receives each old cell's
-/// farthest vertex distance.
+/// The sums land in workspace.sums[0], dense over the grid or, past params.dense_cells_per_particle cells per
+/// particle and where `allow_sparse`, sparse (sums.hpp). With `record_reach` (2D), workspace.reach receives each
+/// old cell's farthest vertex distance.
 template <class Lattice, class Builder, int D, bool E, class Region>
 Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
                              const RemapParams& params, const CellGrid<D>& grid, const Region& region,
-                             RemapWorkspace<D>& workspace, bool record_reach = false) {
+                             RemapWorkspace<D>& workspace, bool record_reach = false, bool allow_sparse = true) {
   static_assert(check_closing_region<Region, D>());
   static_assert(D > 1 || !Region::clips, "closing regions are for 2D and 3D cells");
   const std::size_t n_old = p.n_real;
   auto& sums = workspace.sums;
-  clear_sums(sums, grid.n_cells);
+  const bool sparse = allow_sparse && sum_sparsely(grid.n_cells, n_old, params.dense_cells_per_particle);
+  if (!sparse) check_dense_sums_fit<D>(grid.n_cells, n_old);
+  clear_sums(sums, grid.n_cells, sparse);
   auto specific_energy = [&](std::size_t a) {
     if constexpr (E)
       return p.u[a];
@@ -261,7 +264,7 @@ void for_each_grid_neighbour(const CellGrid<D>& grid, std::size_t c, F&& f) {
 }
 
 /// The end of a remap onto one lattice: the shares of nearly empty cells handed on, and one new particle per
-/// kept cell of `grid`, in lattice order, with h = h_over_dx * Delta.
+/// kept cell of `grid` (each entry of S, dense or sparse), in lattice order, with h = h_over_dx * Delta.
 template <class Lattice, int D, bool E>
 void emit_on_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
                      const CellGrid<D>& grid, Sums<D>& S, RemapWorkspace<D>& ws, RemapStats& stats) {
@@ -269,15 +272,20 @@ void emit_on_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lat
   auto& keep = ws.keep;
   hand_on_sparse_cells<D>(
       S, params, [&](std::size_t) { return cell_volume; },
-      [&](std::size_t c, auto&& f) { for_each_grid_neighbour(grid, c, f); }, stats.dropped_cells, keep);
+      [&](std::size_t c, auto&& f) {
+        for_each_grid_neighbour(grid, S.flat(c), [&](std::size_t g) {
+          if (const std::int64_t e = S.find(g); e >= 0) f(static_cast<std::size_t>(e));
+        });
+      },
+      stats.dropped_cells, keep);
   auto& order = ws.order;
-  order.resize(grid.n_cells);
+  order.resize(S.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
   const double h_new = params.h_over_dx * lattice.spacing;
   emit_particles(
       p, S, keep, order,
       [&](std::size_t c) {
-        return std::pair{lattice.site(box, grid.unflat(c)), h_new};
+        return std::pair{lattice.site(box, grid.unflat(S.flat(c))), h_new};
       },
       stats);
   stats.per_level = {stats.n_after};

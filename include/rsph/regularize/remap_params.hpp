@@ -20,12 +20,17 @@ struct RemapParams {
   /// A new cell whose mass is below this fraction of the largest new mass is handed on like a nearly
   /// empty one: it keeps far tails of an open flow from spawning particles of negligible mass.
   double min_mass_ratio = 0.0;
+  /// The remap sums densely over the grid of lattice cells the particles span while it holds at most this many
+  /// cells per old particle, sparsely (only the cells that receive something) beyond: a disk in a large box or a
+  /// particle far out on an open axis costs memory in proportion to the particles, not to the box.
+  double dense_cells_per_particle = 8.0;
 
   void validate() const {
     require(h_over_dx > 0.0, "regularization: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
     require(min_fill >= 0.0 && min_fill < 1.0, "regularization: min_fill must lie in [0, 1)");
     require(closing_radius_in_h > 0.0, "regularization: the closing radius must be positive");
     require(min_mass_ratio >= 0.0 && min_mass_ratio < 1.0, "regularization: min_mass_ratio must lie in [0, 1)");
+    require(dense_cells_per_particle >= 0.0, "regularization: dense_cells_per_particle must not be negative");
   }
 };
 

@@ -9,23 +9,118 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
+#include <numeric>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace rsph::regularize {
 
 namespace detail {
 
-/// Per-thread sums over old particles for each new cell of a dense index grid.
+/// Lattice cells by flat index, for grids too sparse to hold densely: open addressing with linear probing.
+class SlotMap {
+ public:
+  void clear() {
+    std::fill(key_.begin(), key_.end(), empty);
+    size_ = 0;
+  }
+  /// The slot of `flat`; absent, it is inserted with slot `fresh`.
+  std::uint32_t find_or_insert(std::size_t flat, std::uint32_t fresh) {
+    if (2 * (size_ + 1) > key_.size()) grow();
+    for (std::size_t i = home(flat);; i = (i + 1) & mask_) {
+      if (key_[i] == flat) return slot_[i];
+      if (key_[i] == empty) {
+        key_[i] = flat;
+        slot_[i] = fresh;
+        ++size_;
+        return fresh;
+      }
+    }
+  }
+  /// The slot of `flat`, -1 when absent.
+  std::int64_t find(std::size_t flat) const {
+    if (key_.empty()) return -1;
+    for (std::size_t i = home(flat);; i = (i + 1) & mask_) {
+      if (key_[i] == flat) return slot_[i];
+      if (key_[i] == empty) return -1;
+    }
+  }
+
+ private:
+  static constexpr std::size_t empty = std::numeric_limits<std::size_t>::max();
+  std::size_t home(std::size_t flat) const { return (flat * 0x9E3779B97F4A7C15ull >> 17) & mask_; }
+  void grow() {
+    std::vector<std::size_t> keys(std::max<std::size_t>(64, 2 * key_.size()), empty);
+    std::vector<std::uint32_t> slots(keys.size());
+    std::swap(keys, key_);
+    std::swap(slots, slot_);
+    mask_ = key_.size() - 1;
+    size_ = 0;
+    for (std::size_t i = 0; i < keys.size(); ++i)
+      if (keys[i] != empty) find_or_insert(keys[i], slots[i]);
+  }
+  std::vector<std::size_t> key_;
+  std::vector<std::uint32_t> slot_;
+  std::size_t mask_ = 0, size_ = 0;
+};
+
+/// Per-thread sums over old particles for the new cells of a grid. Dense: one entry per cell of the grid,
+/// indexed by its flat index. Sparse (a grid of many cells per particle: a disk in a box, a particle far out
+/// on an open axis): one entry per cell that received something, found by flat index through a SlotMap, and,
+/// once reduced, in the order of the flat indices. Either way `size()` entries, entry c being grid cell
+/// flat(c), and every cell adds the same shares in the same order.
 template <int D>
 struct alignas(64) Sums {  // one per thread: aligned so that no two threads write to one cache line
   std::vector<Conserved<D>> cell;
+  std::vector<std::size_t> flat_of;  ///< sparse: each entry's grid cell
+  SlotMap slot;                      ///< sparse: grid cell -> entry
+  bool sparse = false;
   double max_mismatch = 0.0;
 
   std::size_t size() const { return cell.size(); }
-  void resize(std::size_t n) {
-    cell.assign(n, Conserved<D>{});
+  /// Dense over n grid cells, or sparse and empty.
+  void reset(std::size_t n, bool sparse_cells) {
+    sparse = sparse_cells;
+    cell.assign(sparse ? 0 : n, Conserved<D>{});
+    flat_of.clear();
+    slot.clear();
     max_mismatch = 0.0;
+  }
+  /// The entry of grid cell `flat` (a new, empty one where a sparse sum has none yet).
+  Conserved<D>& at(std::size_t flat) {
+    if (!sparse) return cell[flat];
+    const std::uint32_t s = slot.find_or_insert(flat, static_cast<std::uint32_t>(cell.size()));
+    if (s == cell.size()) {
+      cell.emplace_back();
+      flat_of.push_back(flat);
+    }
+    return cell[s];
+  }
+  /// Entry c's grid cell, and grid cell f's entry (-1 where a sparse sum has none).
+  std::size_t flat(std::size_t c) const { return sparse ? flat_of[c] : c; }
+  std::int64_t find(std::size_t f) const { return sparse ? slot.find(f) : static_cast<std::int64_t>(f); }
+  /// Makes the entries sparse over the grid cells `flats` (ascending): entry c is cell flats[c].
+  void index_by(std::vector<std::size_t> flats) {
+    sparse = true;
+    flat_of = std::move(flats);
+    slot.clear();
+    for (std::size_t c = 0; c < flat_of.size(); ++c) slot.find_or_insert(flat_of[c], static_cast<std::uint32_t>(c));
+  }
+  /// Sorts sparse entries by grid cell, so that they come in lattice order.
+  void sort_by_cell() {
+    std::vector<std::uint32_t> order(cell.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return flat_of[a] < flat_of[b]; });
+    std::vector<Conserved<D>> sorted(cell.size());
+    std::vector<std::size_t> flats(cell.size());
+    for (std::size_t c = 0; c < order.size(); ++c) {
+      sorted[c] = cell[order[c]];
+      flats[c] = flat_of[order[c]];
+    }
+    cell = std::move(sorted);
+    index_by(std::move(flats));
   }
   /// Adds old particle (m_o, v_o, e_o) to the cells `idx` with overlaps `omega`; V_o, the sum of the omega
   /// (eq. 7), hands its mass m_o out exactly. `exact_volume` is the cell's own volume, for the log.
@@ -36,32 +131,57 @@ struct alignas(64) Sums {  // one per thread: aligned so that no two threads wri
     const double density = m_o / V_o;
     const double specific_energy = e_o + 0.5 * v_o.squaredNorm();
     for (const auto& [n, omega] : overlaps) {
-      const double dm = density * omega;                                           // eq. (6)
-      cell[n] += Conserved<D>{dm, Vec<D>(dm * v_o), dm * specific_energy, omega};  // eqs. (8), (9)
+      const double dm = density * omega;                                         // eq. (6)
+      at(n) += Conserved<D>{dm, Vec<D>(dm * v_o), dm * specific_energy, omega};  // eqs. (8), (9)
     }
   }
-  /// Adds o's sums of the cells [begin, end); the mismatch is merged by the caller.
+  /// Adds o's dense sums of the cells [begin, end); the mismatch is merged by the caller.
   void merge(const Sums& o, std::size_t begin, std::size_t end) {
     for (std::size_t i = begin; i < end; ++i) cell[i] += o.cell[i];
   }
 };
 
-/// Zeroes the per-thread sums, each thread its own, and, once they are filled, reduces them into the first,
-/// split by cells: each cell still adds the threads' sums in thread order, so the result is the serial
-/// reduction's to the bit. On two threads the serial passes over the grid had cost a tenth of the remap.
+/// Whether the remap sums into `n_cells` grid cells for n_old particles sparsely: past
+/// `dense_cells_per_particle` cells per particle (counting at least 1 024 particles: small sets sum densely).
+inline bool sum_sparsely(std::size_t n_cells, std::size_t n_old, double dense_cells_per_particle) {
+  return static_cast<double>(n_cells) >
+         dense_cells_per_particle * static_cast<double>(std::max<std::size_t>(n_old, 1024));
+}
+
+/// Dense sums over a grid must fit: (3 + D) doubles per cell and thread; refuse a grid that would not, rather
+/// than ask for it (the multi-level remap sums on the finest grid densely).
 template <int D>
-void clear_sums(std::vector<Sums<D>>& sums, std::size_t n_cells) {
+void check_dense_sums_fit(std::size_t n_cells, std::size_t n_old) {
+  const double gib = static_cast<double>(n_cells) * static_cast<double>((3 + D) * sizeof(double)) *
+                     static_cast<double>(std::max(1, max_threads())) / double(1u << 30);
+  require(n_cells < (std::size_t{1} << 31) && gib <= 4.0,
+          "regularization: the particles span " + std::to_string(n_cells) + " lattice cells (" + std::to_string(n_old) +
+              " particles; the remap's sums would take " + std::to_string(gib) +
+              " GiB): a particle far from the rest on an open axis?");
+}
+
+/// Clears the per-thread sums, each thread its own (dense over n_cells, or sparse), and, once they are filled,
+/// reduces them into the first. Dense: split by cells, each cell still adding the threads' sums in thread
+/// order, so the result is the serial reduction's to the bit (on two threads the serial passes over the grid
+/// had cost a tenth of the remap). Sparse: thread by thread, in the same order, then sorted by cell.
+template <int D>
+void clear_sums(std::vector<Sums<D>>& sums, std::size_t n_cells, bool sparse = false) {
   sums.resize(static_cast<std::size_t>(max_threads()));
   rsph::run_parallel(sums.size(), [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t t = begin; t < end; ++t) sums[t].resize(n_cells);
+    for (std::size_t t = begin; t < end; ++t) sums[t].reset(n_cells, sparse);
   });
 }
 template <int D>
 void reduce_sums(std::vector<Sums<D>>& sums) {
-  if (sums.size() < 2) return;
-  rsph::run_parallel(sums[0].size(), [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t t = 1; t < sums.size(); ++t) sums[0].merge(sums[t], begin, end);
-  });
+  if (sums[0].sparse) {
+    for (std::size_t t = 1; t < sums.size(); ++t)
+      for (std::size_t c = 0; c < sums[t].size(); ++c) sums[0].at(sums[t].flat_of[c]) += sums[t].cell[c];
+    sums[0].sort_by_cell();
+  } else if (sums.size() > 1) {
+    rsph::run_parallel(sums[0].size(), [&](int, std::size_t begin, std::size_t end) {
+      for (std::size_t t = 1; t < sums.size(); ++t) sums[0].merge(sums[t], begin, end);
+    });
+  }
   for (std::size_t t = 1; t < sums.size(); ++t)
     sums[0].max_mismatch = std::max(sums[0].max_mismatch, sums[t].max_mismatch);
 }

@@ -456,13 +456,31 @@ void hand_out_above_floor(const ParticleSet<D, E>& p, const SecondOrderParams& s
   }
 }
 
+/// Renumbers the listed pieces' cells compactly: returns the grid cells that receive a piece, ascending, and
+/// makes every piece's cell its place in that list (so that the hand-out sums densely over them alone).
+template <int D>
+std::vector<std::size_t> compact_piece_cells(Workspace<D>& ws) {
+  std::vector<std::size_t> cells;
+  for (const auto& t : ws.threads) cells.insert(cells.end(), t.pieces.flat.begin(), t.pieces.flat.end());
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  run_parallel(ws.threads.size(), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t t = begin; t < end; ++t)
+      for (auto& f : ws.threads[t].pieces.flat)
+        f = static_cast<std::size_t>(std::lower_bound(cells.begin(), cells.end(), f) - cells.begin());
+  });
+  return cells;
+}
+
 /// The second-order sums on the cells of `grid`: every old cell built and kept, its gradients fitted, its
-/// pieces listed and handed out; lands in ws.sums[0].
+/// pieces listed and handed out; lands in ws.sums[0], dense over the grid or, past
+/// params.dense_cells_per_particle cells per particle and where `allow_sparse`, over the cells that receive a
+/// piece (sums.hpp).
 template <class Lattice, class Builder, int D, bool E, class Region>
 detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
                                    Builder& builder, const RemapParams& params, const SecondOrderParams& second,
                                    const Region& region, const detail::CellGrid<D>& grid, RemapWorkspace<D>& ws,
-                                   Workspace<D>& w2, RemapStats& stats) {
+                                   Workspace<D>& w2, RemapStats& stats, bool allow_sparse = true) {
   if constexpr (D == 1)
     collect_cells(p, box, lattice, params, grid, w2.cells);
   else if constexpr (D == 2)
@@ -473,11 +491,19 @@ detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box
   reconstruct_density(p, w2.cells, w2.recon);
   reconstruct_motion(p, w2.cells, w2.recon);
   if constexpr (D < 3) list_pieces(p, box, lattice, params, grid, w2);
-  if (second.limit) gather_bounds(p.n_real, grid.n_cells, w2);
+  const bool sparse = allow_sparse && detail::sum_sparsely(grid.n_cells, p.n_real, params.dense_cells_per_particle);
+  std::vector<std::size_t> cells;
+  if (sparse)
+    cells = compact_piece_cells(w2);
+  else
+    detail::check_dense_sums_fit<D>(grid.n_cells, p.n_real);
+  const std::size_t n_cells = sparse ? cells.size() : grid.n_cells;
+  if (second.limit) gather_bounds(p.n_real, n_cells, w2);
   w2.first_order.assign(p.n_real, 0);
-  hand_out_above_floor(p, second, grid.n_cells, ws, w2, stats);
+  hand_out_above_floor(p, second, n_cells, ws, w2, stats);
   for (const auto& r : w2.recon) stats.limited_cells += r.limited;
   stats.max_volume_mismatch = ws.sums[0].max_mismatch;
+  if (sparse) ws.sums[0].index_by(std::move(cells));
   return ws.sums[0];
 }
 

@@ -28,7 +28,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   detail::check_whole_blocks(box, ml);
   const auto grid = detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells);
   auto sums_on = [&](const detail::CellGrid<D>& g, RemapStats& stats) -> detail::Sums<D>& {
-    auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats);
+    auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false);
     if constexpr (D == 2) {  // the face hand-out builds again the old cells whose reach meets a face cell
       ws.reach.resize(p.n_real);
       for (std::size_t a = 0; a < p.n_real; ++a) {
