@@ -16,7 +16,9 @@
 #include "rsph/regularize/remap.hpp"
 #include "rsph/regularize/second_order/cells.hpp"
 #include "rsph/regularize/second_order/cells3d.hpp"
+#include "rsph/regularize/second_order/pieces.hpp"
 #include "rsph/regularize/second_order/reconstruction.hpp"
+#include "rsph/regularize/second_order/workspace.hpp"
 
 #include <array>
 #include <cmath>
@@ -27,82 +29,7 @@
 
 namespace rsph::regularize {
 
-/// The second-order remap's parameters.
-struct SecondOrderParams {
-  /// A new particle whose thermal energy u = E/m - v^2/2 comes out below this fraction of the least u of the
-  /// old cells that feed it is refilled with those cells handed out at first order (which cannot fall
-  /// below it: first-order u is at least the feeders' mass-weighted mean).
-  double thermal_floor = 0.5;
-  /// Barth-Jespersen limiting of every gradient; off only to study the unlimited reconstruction.
-  bool limit = true;
-
-  void validate() const {
-    require(thermal_floor >= 0.0 && thermal_floor < 1.0,
-            "second-order remap: the thermal floor must lie in [0, 1) (got " + std::to_string(thermal_floor) + ")");
-  }
-};
-
 namespace second_order {
-
-/// One old cell's unlimited reconstruction, points relative to its particle, and the ranges of its fields
-/// over the cell and its neighbours.
-template <int D>
-struct Reconstruction {
-  Vec<D> g_rho = Vec<D>::Zero();  ///< about the centroid
-  Vec<D> x_m = Vec<D>::Zero();    ///< mass centroid of the unlimited density, the velocity fit's reference
-  Mat<D> G_v = Mat<D>::Zero();    ///< row k: the gradient of v_k, about the mass centroid
-  Vec<D> g_e = Vec<D>::Zero();    ///< specific total energy, about the mass centroid
-  FieldRanges<D> range;           ///< over the cell and its neighbours
-  std::uint8_t limited = 0;       ///< set by the last hand-out if the limiter cut any gradient
-};
-
-/// What the shares of one old cell are computed from.
-template <int D>
-struct OldCell {
-  double m = 0.0, e = 0.0;  ///< mass and specific total energy
-  Vec<D> v = Vec<D>::Zero();
-  Reconstruction<D>* r = nullptr;
-};
-
-/// The pieces of the old cells one thread listed, in the order of its cells.
-template <int D>
-struct Pieces {
-  std::vector<std::size_t> flat;
-  std::vector<PieceMoments<D>> moments;
-  void clear() {
-    flat.clear();
-    moments.clear();
-  }
-};
-
-/// The limiter's scratch for one old cell's pieces.
-template <int D>
-struct HandOutScratch {
-  std::vector<Vec<D>> offsets, W;
-  std::vector<double> m;
-};
-
-/// Scratch kept from one second-order remap to the next.
-template <int D>
-struct Workspace {
-  CellStore<D> cells;
-  CellsByThread by_thread;        ///< 2D
-  FacesByThread faces_by_thread;  ///< 3D
-  neighbors::CellList<D> lookup;
-  std::vector<Reconstruction<D>> recon;
-  std::vector<std::uint8_t> first_order, bad;
-  std::vector<std::vector<double>> u_min;  ///< per thread: the least u of the old cells feeding each new cell
-  /// per thread, then reduced into the first: each new cell's bounds, the union of the ranges of the old
-  /// cells that overlap it (each over the cell and its neighbours)
-  std::vector<std::vector<FieldRanges<D>>> bounds;
-  struct alignas(64) PerThread {
-    Pieces<D> pieces;
-    HandOutScratch<D> scratch;
-  };
-  std::vector<PerThread> threads;
-  /// Where each old cell's pieces are: the thread that listed them, the first and how many.
-  std::vector<std::uint32_t> piece_thread, piece_first, piece_count;
-};
 
 template <int D>
 double specific_total_energy(double u, const Vec<D>& v) {
@@ -233,65 +160,6 @@ void hand_out(const OldCell<D>& o, std::span<const std::size_t> flat, std::span<
         Conserved<D>{pc.m[k], Vec<D>(pc.m[k] * o.v + G_v * pc.W[k]), pc.m[k] * o.e + g_e.dot(pc.W[k]), moments[k].area};
 }
 
-/// Calls f(flat index, moments) for every piece of the 2D old cell `cell` (relative to its particle at xo)
-/// on the lattice cells of `grid`. Rectangular cells: the cell is cut column by column, each column row by
-/// row; other shapes: clipped by each candidate cell, and a part beyond a wall shared out as in the
-/// first-order remap. Round-off crumbs below 1e-13 of the cell are dropped, as there.
-template <class Lattice, class F>
-void for_each_piece(const Lattice& lattice, const Box<2>& box, const detail::CellGrid<2>& grid, std::size_t a,
-                    const geometry::ConvexPolygon& cell, const Vec<2>& xo, F&& f) {
-  geometry::Bounds b;
-  const double crumb = 1e-13 * geometry::area_and_bounds(cell, b);
-  const auto r = lattice.cells_touching(box, Vec<2>(b.lo + xo), Vec<2>(b.hi + xo));
-  auto emit = [&](std::array<std::int64_t, 2> idx, const geometry::ConvexPolygon& piece) {
-    if (piece.n < 3) return;
-    const auto m = geometry::moments(piece);
-    if (!(m.area > crumb)) return;
-    const std::int64_t col = detail::axis_part(grid, box, 0, idx[0]), row = detail::axis_part(grid, box, 1, idx[1]);
-    if ((col | row) < 0)
-      throw NumericalError("regularization: an old cell reaches beyond the lattice grid (particle " +
-                           std::to_string(a) + ")");
-    f(static_cast<std::size_t>(col + row), piece_moments(m));
-  };
-  if constexpr (Lattice::rectangular_cells) {
-    // ping-pong buffers: the rest of the cell right of the column lines, the column, the rest of the column
-    // above the row lines, the piece; nothing is copied
-    std::array<geometry::ConvexPolygon, 6> buf;
-    const geometry::ConvexPolygon* rest = &cell;
-    for (std::int64_t i = r.lo[0], rb = 0; i <= r.hi[0] && rest->n >= 3; ++i) {
-      const geometry::ConvexPolygon* column = rest;
-      if (i < r.hi[0]) {
-        geometry::split_at(*rest, 0, lattice.line(box, 0, i + 1, xo[0]), buf[2], buf[static_cast<std::size_t>(rb)]);
-        column = &buf[2];
-        rest = &buf[static_cast<std::size_t>(rb)];
-        rb ^= 1;
-      }
-      const geometry::ConvexPolygon* row_rest = column;
-      for (std::int64_t j = r.lo[1], cb = 4; j <= r.hi[1] && row_rest->n >= 3; ++j) {
-        const geometry::ConvexPolygon* piece = row_rest;
-        if (j < r.hi[1]) {
-          geometry::split_at(*row_rest, 1, lattice.line(box, 1, j + 1, xo[1]), buf[3],
-                             buf[static_cast<std::size_t>(cb)]);
-          piece = &buf[3];
-          row_rest = &buf[static_cast<std::size_t>(cb)];
-          cb ^= 1;
-        }
-        emit({i, j}, *piece);
-      }
-    }
-  } else {
-    for (std::int64_t j = r.lo[1]; j <= r.hi[1]; ++j)
-      for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i) {
-        const geometry::ConvexPolygon part = geometry::clip_convex(cell, lattice.cell(box, {i, j}, xo));
-        if (part.n < 3) continue;
-        if (detail::beyond_wall(grid, box, {i, j}))
-          detail::share_beyond_wall(lattice, grid, box, {i, j}, part, xo, emit);
-        else
-          emit({i, j}, part);
-      }
-  }
-}
-
 template <int D, bool E>
 OldCell<D> old_cell(const ParticleSet<D, E>& p, std::vector<Reconstruction<D>>& recon, std::size_t a) {
   OldCell<D> o;
@@ -300,75 +168,6 @@ OldCell<D> old_cell(const ParticleSet<D, E>& p, std::vector<Reconstruction<D>>& 
   if constexpr (E) o.e = specific_total_energy<D>(p.u[a], p.v[a]);
   o.r = &recon[a];
   return o;
-}
-
-/// Lists every old cell's pieces (kept per thread for the hand-outs) in 1D and 2D; 3D cells list theirs as
-/// they are built (cells3d.hpp).
-template <class Lattice, int D, bool E>
-void list_pieces(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
-                 const detail::CellGrid<D>& grid, Workspace<D>& ws) {
-  const auto n_threads = static_cast<std::size_t>(max_threads());
-  ws.threads.resize(n_threads);
-  ws.piece_thread.resize(p.n_real);
-  ws.piece_first.resize(p.n_real);
-  ws.piece_count.resize(p.n_real);
-  auto listed = [&](int t, std::size_t a, std::size_t first) {
-    const auto& own = ws.threads[static_cast<std::size_t>(t)].pieces;
-    ws.piece_thread[a] = static_cast<std::uint32_t>(t);
-    ws.piece_first[a] = static_cast<std::uint32_t>(first);
-    ws.piece_count[a] = static_cast<std::uint32_t>(own.flat.size() - first);
-  };
-  for (auto& t : ws.threads) t.pieces.clear();
-  if constexpr (D == 1) {
-    auto& own = ws.threads[0].pieces;
-    detail::for_each_old_interval(p, box, lattice, params, grid,
-                                  [&](std::size_t a, double left, double, const auto& overlaps, double) {
-                                    const std::size_t first = own.flat.size();
-                                    double at = left - p.x[a][0];  // the overlaps come in order from the left end
-                                    for (const auto& [c, omega] : overlaps) {
-                                      own.flat.push_back(c);
-                                      own.moments.push_back(interval_moments(at, at + omega));
-                                      at += omega;
-                                    }
-                                    listed(0, a, first);
-                                  });
-  } else {
-    run_parallel(p.n_real, [&](int t, std::size_t begin, std::size_t end) {
-      auto& own = ws.threads[static_cast<std::size_t>(t)].pieces;
-      for (std::size_t a = begin; a < end; ++a) {
-        const std::size_t first = own.flat.size();
-        for_each_piece(lattice, box, grid, a, ws.cells.polygon(a), p.x[a],
-                       [&](std::size_t c, const PieceMoments<2>& pm) {
-                         own.flat.push_back(c);
-                         own.moments.push_back(pm);
-                       });
-        listed(t, a, first);
-      }
-    });
-  }
-}
-
-/// Each new cell's bounds: the union of the ranges of the old cells with a piece in it, into ws.bounds[0] (a
-/// union of ranges, the same in any order).
-template <int D>
-void gather_bounds(std::size_t n_old, std::size_t n_cells, Workspace<D>& ws) {
-  const auto n_threads = static_cast<std::size_t>(max_threads());
-  ws.bounds.resize(n_threads);
-  run_parallel(n_threads, [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t t = begin; t < end; ++t) ws.bounds[t].assign(n_cells, FieldRanges<D>{});
-  });
-  run_parallel(n_old, [&](int t, std::size_t begin, std::size_t end) {
-    auto& own = ws.bounds[static_cast<std::size_t>(t)];
-    for (std::size_t a = begin; a < end; ++a) {
-      const auto& listed = ws.threads[ws.piece_thread[a]].pieces;
-      for (std::size_t k = ws.piece_first[a], last = k + ws.piece_count[a]; k < last; ++k)
-        own[listed.flat[k]].add(ws.recon[a].range);
-    }
-  });
-  run_parallel(n_cells, [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t t = 1; t < ws.bounds.size(); ++t)
-      for (std::size_t c = begin; c < end; ++c) ws.bounds[0][c].add(ws.bounds[t][c]);
-  });
 }
 
 /// One pass over the old cells' pieces: every piece's shares into the per-thread sums (reduced into
@@ -454,22 +253,6 @@ void hand_out_above_floor(const ParticleSet<D, E>& p, const SecondOrderParams& s
     stats.first_order_cells += taken;
     if (taken == 0) break;  // every feeder is at first order already: nothing left to fall back on
   }
-}
-
-/// Renumbers the listed pieces' cells compactly: returns the grid cells that receive a piece, ascending, and
-/// makes every piece's cell its place in that list (so that the hand-out sums densely over them alone).
-template <int D>
-std::vector<std::size_t> compact_piece_cells(Workspace<D>& ws) {
-  std::vector<std::size_t> cells;
-  for (const auto& t : ws.threads) cells.insert(cells.end(), t.pieces.flat.begin(), t.pieces.flat.end());
-  std::sort(cells.begin(), cells.end());
-  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-  run_parallel(ws.threads.size(), [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t t = begin; t < end; ++t)
-      for (auto& f : ws.threads[t].pieces.flat)
-        f = static_cast<std::size_t>(std::lower_bound(cells.begin(), cells.end(), f) - cells.begin());
-  });
-  return cells;
 }
 
 /// The second-order sums on the cells of `grid`: every old cell built and kept, its gradients fitted, its
