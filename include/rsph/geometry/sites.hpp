@@ -166,18 +166,19 @@ inline bool needs_more_images(double r2_max, const Vec<D>& xa, const Box<D>& box
   return false;
 }
 
-/// Runs try_build(margin) with periodic images over a margin of 4 mean spacings (at most a period), doubling it (and
+/// Runs try_build(margin) with periodic images over a margin of 4 mean spacings (at most 4 periods), doubling it (and
 /// calling visit.restart()) until every cell's security disc is covered.
 template <int D, class Visitor, class TryBuild>
 void build_widening_images(const std::vector<Vec<D>>& x, const Box<D>& box, Visitor& visit, TryBuild&& try_build) {
   check_sites(x, box);
-  // Four spacings, but never more than a period: a particle far out on an open axis inflates the mean spacing,
-  // and images over a margin of many periods would number in the millions.
+  // Four spacings, but never more than four periods (beyond which the widening below gives up anyway): a
+  // particle far out on an open axis inflates the mean spacing, and images over a margin of thousands of periods
+  // would number in the millions.
   double period = 0.0;
   for (int k = 0; k < D; ++k)
     if (box.periodic(k)) period = std::max(period, box.hi[k] - box.lo[k]);
   double margin = 4.0 * mean_spacing(x, box);
-  if (period > 0.0) margin = std::min(margin, period);
+  if (period > 0.0) margin = std::min(margin, 4.0 * period);
   for (int attempt = 0;; ++attempt) {
     if (attempt > 0) visit.restart();
     if (try_build(margin)) return;

@@ -1,7 +1,7 @@
 #pragma once
 // The old cells of a 3D remap: each particle's Voronoi polyhedron split across the cells of a lattice of
 // rectangular cells (lattice::Cubic), its overlaps Omega_n^o (flat index, volume) handed to the remap's
-// action, as the 2D visitor in remap.hpp hands its polygons' overlaps.
+// action, as old_cells_2d.hpp hands the polygons' overlaps in 2D.
 #include "rsph/core/errors.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/core/scratch.hpp"
@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace rsph::regularize::detail {
