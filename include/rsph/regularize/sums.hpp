@@ -130,10 +130,14 @@ struct alignas(64) Sums {  // one per thread: aligned so that no two threads wri
     max_mismatch = std::max(max_mismatch, std::abs(V_o - exact_volume) / exact_volume);
     const double density = m_o / V_o;
     const double specific_energy = e_o + 0.5 * v_o.squaredNorm();
-    for (const auto& [n, omega] : overlaps) {
-      const double dm = density * omega;                                         // eq. (6)
-      at(n) += Conserved<D>{dm, Vec<D>(dm * v_o), dm * specific_energy, omega};  // eqs. (8), (9)
-    }
+    auto share = [&](double omega) {
+      const double dm = density * omega;                                       // eq. (6)
+      return Conserved<D>{dm, Vec<D>(dm * v_o), dm * specific_energy, omega};  // eqs. (8), (9)
+    };
+    if (sparse)  // decided once per cell, not per overlap: the dense loop stays as tight as before
+      for (const auto& [n, omega] : overlaps) at(n) += share(omega);
+    else
+      for (const auto& [n, omega] : overlaps) cell[n] += share(omega);
   }
   /// Adds o's dense sums of the cells [begin, end); the mismatch is merged by the caller.
   void merge(const Sums& o, std::size_t begin, std::size_t end) {
