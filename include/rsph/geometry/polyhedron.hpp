@@ -52,7 +52,6 @@ struct ConvexPolyhedron {
     nv = nf = 0;
     face_start[0] = 0;
   }
-  int n_corners() const { return face_start[static_cast<std::size_t>(nf)]; }
   const Point3& operator[](int i) const { return v[static_cast<std::size_t>(i)]; }
 
   int add_vertex(const Point3& p) {
@@ -75,10 +74,6 @@ struct ConvexPolyhedron {
   }
   void close_face() {
     if (face_start[static_cast<std::size_t>(nf) + 1] - face_start[static_cast<std::size_t>(nf)] >= 3) ++nf;
-  }
-
-  void translate(const Point3& d) {
-    for (int i = 0; i < nv; ++i) v[static_cast<std::size_t>(i)] += d;
   }
 
   /// The box [lo, hi].

@@ -91,16 +91,18 @@ struct KeepCells3 {
     own.count.push_back(static_cast<std::uint32_t>(own.faces.size() - before));
     auto& pieces = ws->threads[t].pieces;
     const std::size_t first = pieces.flat.size();
-    const geometry::Moments3 whole = geometry::moments(cell);
-    set_geometry<3>(ws->cells, a, piece_moments(whole));
-    const double crumb = 1e-13 * whole.volume;
+    // the cell's geometry is the sum of its kept pieces', as the hand-out takes it: no second pass over the cell
+    const double crumb = 1e-13 * geometry::volume(cell);
+    geometry::Moments3 kept;
     detail::for_each_lattice_piece<geometry::MomentMeasure>(*lattice, *box, *grid, p->x[a], cell, own.pieces,
                                                             [&](std::int64_t flat, const geometry::Moments3& m) {
                                                               if (!(m.volume > crumb)) return;
                                                               if (flat < 0) throw detail::beyond_grid_3d(a);
                                                               pieces.flat.push_back(static_cast<std::size_t>(flat));
                                                               pieces.moments.push_back(piece_moments(m));
+                                                              kept += m;
                                                             });
+    set_geometry<3>(ws->cells, a, piece_moments(kept));
     ws->piece_thread[a] = static_cast<std::uint32_t>(thread);
     ws->piece_first[a] = static_cast<std::uint32_t>(first);
     ws->piece_count[a] = static_cast<std::uint32_t>(pieces.flat.size() - first);
