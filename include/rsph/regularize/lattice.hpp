@@ -8,6 +8,7 @@
 #include <concepts>
 #include <cstdint>
 #include <numbers>
+#include <span>
 #include <string>
 #include <utility>
 
@@ -32,14 +33,37 @@ concept RegularLattice = requires(const L& l, const Box<D>& box, const Vec<D>& l
   { l.periods(box) } -> std::same_as<std::array<std::int64_t, D>>;  ///< cells per periodic axis (0: not periodic)
 };
 
+/// The new cells of a lattice whose sites each own a cell of their own (2D), placed for one remap: how many,
+/// each site, its cell relative to a point, the area a full cell holds (for the hand-on of nearly empty
+/// cells), the sites next to one, and the candidates whose cells may overlap a polygon.
+template <class S>
+concept SiteCells = requires(const S& s, std::size_t c, const geometry::ConvexPolygon& polygon, const Vec<2>& x) {
+  { s.n_cells } -> std::convertible_to<std::size_t>;
+  { s.site(c) } -> std::same_as<Vec<2>>;
+  { s.cell(c, x) } -> std::same_as<geometry::ConvexPolygon>;
+  { s.nominal_area(c) } -> std::same_as<double>;
+  s.for_each_neighbour(c, [](std::size_t) {});
+  s.for_each_candidate(polygon, x, [](std::size_t) {});
+};
+
+/// A lattice whose sites are placed anew at every remap for the gas being remapped (lattice::Rings follows
+/// its orbits): `following(x, m, reach)` gives the SiteCells for gas at x of masses m whose old cells reach
+/// at most `reach` beyond their particles.
+template <class L>
+concept PerSiteLattice = requires(const L& l, std::span<const Vec<2>> x, std::span<const double> m, double reach) {
+  requires L::per_site_cells;
+  { l.following(x, m, reach) } -> SiteCells;
+};
+
 /// What a LatticeRegularizer takes as its lattice: a dimension and a spacing Delta, and either the sites
-/// and cells of one level (RegularLattice) or levels in factors of two (`finest()`, lattice::MultiLevel).
+/// and cells of one level (RegularLattice), levels in factors of two (`finest()`, lattice::MultiLevel) or
+/// sites with cells of their own (PerSiteLattice).
 template <class L>
 concept RegularizationLattice = requires(const L& l) {
   { L::dim } -> std::convertible_to<int>;
   { l.spacing } -> std::convertible_to<double>;
 }
-&&(RegularLattice<L, L::dim> || requires(const L& l) { l.finest(); });
+&&(RegularLattice<L, L::dim> || requires(const L& l) { l.finest(); } || PerSiteLattice<L>);
 
 /// What the remap asks of a lattice's cells beyond the concept: in 1D each cell's bounds; in 2D and 3D whether
 /// the cells are the boxes between grid lines (then the lines), or, in 2D, one convex shape moved to every site.
@@ -98,9 +122,12 @@ constexpr bool check_lattice() {
                   { L::dim } -> std::convertible_to<int>;
                 })
     static_assert(
-        RegularLattice<L, L::dim> || requires(const L& l) { l.finest(); },
+        RegularLattice<L, L::dim> || requires(const L& l) { l.finest(); } || PerSiteLattice<L>,
         "a regularization lattice needs `cell_volume()`, `cells_touching(box, lo, hi)`, `site(box, index)` "
-        "and `periods(box)` (one level), or `finest()` (levels in factors of two, lattice::MultiLevel)");
+        "and `periods(box)` (one level), `finest()` (levels in factors of two, lattice::MultiLevel), or "
+        "`per_site_cells` and `following(x, m, reach)` giving sites with cells of their own (lattice::Rings), "
+        "whose result has `n_cells`, `site(c)`, `cell(c, origin)`, `nominal_area(c)`, `for_each_neighbour(c, f)` "
+        "and `for_each_candidate(polygon, origin, f)`");
   if constexpr (requires {
                   { L::dim } -> std::convertible_to<int>;
                 })
@@ -282,3 +309,5 @@ struct Cubic {
 
 }  // namespace lattice
 }  // namespace rsph
+
+#include "rsph/regularize/rings.hpp"  // lattice::Rings: sites with cells of their own

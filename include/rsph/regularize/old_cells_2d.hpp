@@ -8,6 +8,7 @@
 #include "rsph/geometry/polygon.hpp"
 #include "rsph/geometry/voronoi.hpp"
 #include "rsph/regularize/cell_grid.hpp"
+#include "rsph/regularize/region.hpp"
 
 #include <array>
 #include <cstdint>
@@ -107,13 +108,8 @@ struct OldCellVisitor {
   }
   void restart() { action->restart(); }
   void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
-    if constexpr (Region::clips) {
-      geometry::ConvexPolygon closed = cell;
-      region->clip(p->x[a], closed);
-      add_cell(thread, a, closed);
-    } else {
-      add_cell(thread, a, cell);
-    }
+    rsph::region::with_closed(*region, p->x[a], cell,
+                              [&](const geometry::ConvexPolygon& closed) { add_cell(thread, a, closed); });
   }
 
   /// The overlaps listed so far for one cell: how many, and V_o their sum in their order.

@@ -41,6 +41,19 @@ struct Annulus {
   }
 };
 
+/// f(cell) with the 2D cell (relative to x_o) closed by the region: the cell itself, uncopied, where the region
+/// does not clip.
+template <class Region, class F>
+void with_closed(const Region& region, const Vec<2>& x_o, const geometry::ConvexPolygon& cell, F&& f) {
+  if constexpr (Region::clips) {
+    geometry::ConvexPolygon closed = cell;
+    region.clip(x_o, closed);
+    f(closed);
+  } else {
+    f(cell);
+  }
+}
+
 namespace detail {
 /// Cuts a 3D cell (relative to x_o) to the side of the plane through the point at `reach` along the unit
 /// normal `n` from x_o: n . y <= reach.

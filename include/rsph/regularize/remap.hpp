@@ -16,6 +16,7 @@
 #include "rsph/regularize/old_cells_1d.hpp"
 #include "rsph/regularize/old_cells_2d.hpp"
 #include "rsph/regularize/old_cells_3d.hpp"
+#include "rsph/regularize/old_cells_sites.hpp"
 #include "rsph/regularize/region.hpp"
 #include "rsph/regularize/remap_params.hpp"
 #include "rsph/regularize/sums.hpp"
@@ -40,9 +41,9 @@ namespace detail {
 /// action(thread, a, cell, overlaps, V_o, cell_volume), the cell relative to x_a, overlaps as (flat index,
 /// Omega) and V_o their sum, in their order. The builder may restart (wider periodic images): action.restart()
 /// then forgets what it saw. `only` (ascending, empty for all) names the particles whose cells are visited.
-template <class Lattice, class Builder, int D, bool E, class Region, class Action>
+template <class Lattice, class Builder, int D, bool E, class Grid, class Region, class Action>
 void for_each_old_cell(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
-                       const CellGrid<D>& grid, const Region& region, RemapWorkspace<D>& workspace, Action& action,
+                       const Grid& grid, const Region& region, RemapWorkspace<D>& workspace, Action& action,
                        std::span<const std::uint32_t> only = {}) {
   auto visitor = old_cell_visitor(p, box, lattice, grid, region, action);
   builder.build(p.x, box, workspace.closing, visitor, only);
@@ -90,14 +91,15 @@ struct AddToSums {
   }
 };
 
-/// Eqs. (6)-(9) before the division: for every cell of `grid`, the sums over old particles o of
+/// Eqs. (6)-(9) before the division: for every cell of `grid` (a CellGrid, or the SiteCells of a per-site
+/// lattice), the sums over old particles o of
 /// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
 /// The sums land in workspace.sums[0], dense over the grid or, past params.dense_cells_per_particle cells per
 /// particle and where `allow_sparse`, sparse (sums.hpp). With `record_reach` (2D), workspace.reach receives each
 /// old cell's farthest vertex distance.
-template <class Lattice, class Builder, int D, bool E, class Region>
+template <class Lattice, class Builder, int D, bool E, class Grid, class Region>
 Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
-                             const RemapParams& params, const CellGrid<D>& grid, const Region& region,
+                             const RemapParams& params, const Grid& grid, const Region& region,
                              RemapWorkspace<D>& workspace, bool record_reach = false, bool allow_sparse = true) {
   static_assert(check_closing_region<Region, D>());
   static_assert(D > 1 || !Region::clips, "closing regions are for 2D and 3D cells");
@@ -263,17 +265,17 @@ void for_each_grid_neighbour(const CellGrid<D>& grid, std::size_t c, F&& f) {
   }
 }
 
-/// The end of a remap onto one lattice: the shares of nearly empty cells handed on, and one new particle per
-/// kept cell of `grid` (each entry of S, dense or sparse), in lattice order, with h = h_over_dx * Delta.
-template <class Lattice, int D, bool E>
-void emit_on_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
-                     const CellGrid<D>& grid, Sums<D>& S, RemapWorkspace<D>& ws, RemapStats& stats) {
-  const double cell_volume = lattice.cell_volume();
+/// The end of every remap: the shares of nearly empty cells handed on, and one new particle per kept cell (each
+/// entry of S, dense or sparse), in the order of S, with h = h_over_dx * Delta. `volume(c)` is grid cell c's
+/// volume, `for_each_neighbour(c, f)` calls f(g) for the grid cells next to it, `site(c)` is its site.
+template <int D, bool E, class Volume, class ForEachNeighbour, class Site>
+void hand_on_and_emit(ParticleSet<D, E>& p, Sums<D>& S, const RemapParams& params, double spacing, Volume&& volume,
+                      ForEachNeighbour&& for_each_neighbour, Site&& site, RemapWorkspace<D>& ws, RemapStats& stats) {
   auto& keep = ws.keep;
   hand_on_sparse_cells<D>(
-      S, params, [&](std::size_t) { return cell_volume; },
+      S, params, [&](std::size_t c) { return volume(S.flat(c)); },
       [&](std::size_t c, auto&& f) {
-        for_each_grid_neighbour(grid, S.flat(c), [&](std::size_t g) {
+        for_each_neighbour(S.flat(c), [&](std::size_t g) {
           if (const std::int64_t e = S.find(g); e >= 0) f(static_cast<std::size_t>(e));
         });
       },
@@ -281,14 +283,46 @@ void emit_on_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lat
   auto& order = ws.order;
   order.resize(S.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
-  const double h_new = params.h_over_dx * lattice.spacing;
+  const double h_new = params.h_over_dx * spacing;
   emit_particles(
       p, S, keep, order,
       [&](std::size_t c) {
-        return std::pair{lattice.site(box, grid.unflat(S.flat(c))), h_new};
+        return std::pair{site(S.flat(c)), h_new};
       },
       stats);
   stats.per_level = {stats.n_after};
+}
+
+/// The end of a remap onto one lattice of congruent cells, in lattice order.
+template <class Lattice, int D, bool E>
+void emit_on_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
+                     const CellGrid<D>& grid, Sums<D>& S, RemapWorkspace<D>& ws, RemapStats& stats) {
+  const double cell_volume = lattice.cell_volume();
+  hand_on_and_emit(
+      p, S, params, lattice.spacing, [&](std::size_t) { return cell_volume; },
+      [&](std::size_t c, auto&& f) { for_each_grid_neighbour(grid, c, f); },
+      [&](std::size_t c) { return lattice.site(box, grid.unflat(c)); }, ws, stats);
+}
+
+/// The end of a remap onto a lattice of per-site cells: each cell's volume for the hand-on the area a full one
+/// holds, its neighbours the sites' own.
+template <class Lattice, bool E, SiteCells Sites>
+void emit_on_lattice(ParticleSet<2, E>& p, const Box<2>&, const Lattice& lattice, const RemapParams& params,
+                     const Sites& sites, Sums<2>& S, RemapWorkspace<2>& ws, RemapStats& stats) {
+  hand_on_and_emit(
+      p, S, params, lattice.spacing, [&](std::size_t c) { return sites.nominal_area(c); },
+      [&](std::size_t c, auto&& f) { sites.for_each_neighbour(c, f); }, [&](std::size_t c) { return sites.site(c); },
+      ws, stats);
+}
+
+/// The new cells a remap sums into: the candidate grid of a lattice of congruent cells, or the sites a
+/// per-site lattice places for the particles, with their cells.
+template <class Lattice, int D, bool E>
+auto new_cells(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params) {
+  if constexpr (PerSiteLattice<Lattice>)
+    return site_cells(p, box, lattice, params);
+  else
+    return candidate_grid(p, box, lattice, params);
 }
 
 template <class Lattice, int D, bool E>
@@ -328,7 +362,7 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   detail::check_remap_input(p, lattice, params);
   RemapWorkspace<D> local;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
-  const auto grid = detail::candidate_grid(p, box, lattice, params);
+  const auto grid = detail::new_cells(p, box, lattice, params);
   auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;

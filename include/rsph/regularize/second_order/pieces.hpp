@@ -76,11 +76,21 @@ void for_each_piece(const Lattice& lattice, const Box<2>& box, const detail::Cel
   }
 }
 
+/// Per-site cells (lattice::Rings): f(site, moments) for every piece of the old cell in the cells the sites'
+/// lookup names, crumbs dropped as above.
+template <class Lattice, SiteCells Sites, class F>
+void for_each_piece(const Lattice&, const Box<2>&, const Sites& sites, std::size_t, const geometry::ConvexPolygon& cell,
+                    const Vec<2>& xo, F&& f) {
+  detail::for_each_site_piece(
+      sites, cell, xo, 1e-13 * geometry::area(cell),
+      [&](std::size_t c, const geometry::ConvexPolygon& piece) { f(c, piece_moments(geometry::moments(piece))); });
+}
+
 /// Lists every old cell's pieces (kept per thread for the hand-outs) in 1D and 2D; 3D cells list theirs as
 /// they are built (cells3d.hpp).
-template <class Lattice, int D, bool E>
+template <class Lattice, int D, bool E, class Grid>
 void list_pieces(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
-                 const detail::CellGrid<D>& grid, Workspace<D>& ws) {
+                 const Grid& grid, Workspace<D>& ws) {
   const auto n_threads = static_cast<std::size_t>(max_threads());
   ws.threads.resize(n_threads);
   ws.piece_thread.resize(p.n_real);

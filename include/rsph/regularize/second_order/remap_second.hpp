@@ -259,11 +259,11 @@ void hand_out_above_floor(const ParticleSet<D, E>& p, const SecondOrderParams& s
 /// pieces listed and handed out; lands in ws.sums[0], dense over the grid or, past
 /// params.dense_cells_per_particle cells per particle and where `allow_sparse`, over the cells that receive a
 /// piece (sums.hpp).
-template <class Lattice, class Builder, int D, bool E, class Region>
+template <class Lattice, class Builder, int D, bool E, class Region, class Grid>
 detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
                                    Builder& builder, const RemapParams& params, const SecondOrderParams& second,
-                                   const Region& region, const detail::CellGrid<D>& grid, RemapWorkspace<D>& ws,
-                                   Workspace<D>& w2, RemapStats& stats, bool allow_sparse = true) {
+                                   const Region& region, const Grid& grid, RemapWorkspace<D>& ws, Workspace<D>& w2,
+                                   RemapStats& stats, bool allow_sparse = true) {
   if constexpr (D == 1)
     collect_cells(p, box, lattice, params, grid, w2.cells);
   else if constexpr (D == 2)
@@ -307,7 +307,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   second_order::Workspace<D> local2;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   second_order::Workspace<D>& w2 = ws2 ? *ws2 : local2;
-  const auto grid = detail::candidate_grid(p, box, lattice, params);
+  const auto grid = detail::new_cells(p, box, lattice, params);
   RemapStats stats;
   second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2, stats);
   detail::emit_on_lattice(p, box, lattice, params, grid, ws.sums[0], ws, stats);

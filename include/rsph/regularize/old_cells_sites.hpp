@@ -1,0 +1,89 @@
+#pragma once
+// The old cells of a 2D remap onto a lattice whose sites each own a cell of their own (lattice::Rings): each
+// old Voronoi polygon clipped by the new cells the sites' lookup by ring and angle names, and the new
+// particles on those sites. The sums, the hand-on and the emission are remap.hpp's.
+#include "rsph/core/errors.hpp"
+#include "rsph/core/particle_set.hpp"
+#include "rsph/core/scratch.hpp"
+#include "rsph/geometry/polygon.hpp"
+#include "rsph/geometry/sites.hpp"
+#include "rsph/regularize/cell_grid.hpp"
+#include "rsph/regularize/region.hpp"
+#include "rsph/regularize/lattice.hpp"
+
+#include <span>
+#include <vector>
+
+namespace rsph::regularize::detail {
+
+/// f(c, piece) for every piece of the old cell `cell` (relative to its particle at xo) in a new cell c of
+/// `sites` whose area exceeds `crumb`; the pieces are relative to xo.
+template <SiteCells Sites, class F>
+void for_each_site_piece(const Sites& sites, const geometry::ConvexPolygon& cell, const Vec<2>& xo, double crumb,
+                         F&& f) {
+  const geometry::Bounds b = geometry::bounds(cell);
+  sites.for_each_candidate(cell, xo, [&](std::size_t c) {
+    const geometry::ConvexPolygon window = sites.cell(c, xo);
+    const geometry::Bounds w = geometry::bounds(window);
+    if (w.lo.x() >= b.hi.x() || w.hi.x() <= b.lo.x() || w.lo.y() >= b.hi.y() || w.hi.y() <= b.lo.y()) return;
+    const geometry::ConvexPolygon piece = geometry::clip_convex(cell, window);
+    if (piece.n >= 3 && geometry::area(piece) > crumb) f(c, piece);
+  });
+}
+
+/// The builder's visitor for per-site cells: each old cell, closed by the region, with its overlaps listed in
+/// per-thread scratch and handed to the action.
+template <SiteCells Sites, bool E, class Region, class Action>
+struct SiteCellVisitor {
+  const ParticleSet<2, E>* p;
+  const Sites* sites;
+  const Region* region;
+  Action* action;
+  struct alignas(64) Scratch {
+    std::vector<Overlap> overlaps;
+  };
+  std::vector<Scratch> scratch;
+
+  void restart() { action->restart(); }
+  void operator()(int thread, std::size_t a, const geometry::ConvexPolygon& cell) {
+    rsph::region::with_closed(*region, p->x[a], cell,
+                              [&](const geometry::ConvexPolygon& closed) { add_cell(thread, a, closed); });
+  }
+  void add_cell(int thread, std::size_t a, const geometry::ConvexPolygon& closed) {
+    if (closed.n < 3) throw NumericalError("regularization: an old cell closed to nothing");
+    auto& own = scratch[static_cast<std::size_t>(thread)].overlaps;
+    own.clear();
+    const double cell_area = geometry::area(closed);
+    double V_o = 0.0;
+    for_each_site_piece(*sites, closed, p->x[a], 1e-13 * cell_area,
+                        [&](std::size_t c, const geometry::ConvexPolygon& piece) {
+                          const double omega = geometry::area(piece);
+                          own.emplace_back(c, omega);
+                          V_o += omega;
+                        });
+    (*action)(thread, a, closed, std::span<const Overlap>(own), V_o, cell_area);
+  }
+};
+
+/// The visitor for_each_old_cell (remap.hpp) hands the builder for per-site cells.
+template <class Lattice, bool E, class Region, class Action, SiteCells Sites>
+SiteCellVisitor<Sites, E, Region, Action> old_cell_visitor(const ParticleSet<2, E>& p, const Box<2>&, const Lattice&,
+                                                           const Sites& sites, const Region& region, Action& action) {
+  using Visitor = SiteCellVisitor<Sites, E, Region, Action>;
+  return Visitor{&p, &sites, &region, &action,
+                 std::vector<typename Visitor::Scratch>(static_cast<std::size_t>(geometry::builder_threads()))};
+}
+
+/// The new cells of a per-site lattice for the particles `p`: its sites placed for them (a rings lattice
+/// follows their orbits) with the cells built out to where an old cell may reach.
+template <class Lattice, bool E>
+auto site_cells(const ParticleSet<2, E>& p, const Box<2>& box, const Lattice& lattice, const RemapParams& params) {
+  require(box.edge[0] == Edge::open && box.edge[1] == Edge::open,
+          "regularization: a lattice of per-site cells (rings) needs a box open on both axes");
+  double max_h = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) max_h = std::max(max_h, p.h[a]);
+  return lattice.following(std::span<const Vec<2>>(p.x.data(), p.n_real), std::span<const double>(p.m.data(), p.n_real),
+                           params.closing_radius_in_h * max_h * 1.1);
+}
+
+}  // namespace rsph::regularize::detail

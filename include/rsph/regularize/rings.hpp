@@ -1,0 +1,277 @@
+#pragma once
+// An orbit-following polar lattice for disks: rings r_i = r_in + (i + 1/2) Delta, ring i holding
+// N_i = round(2 pi r_i / Delta) sites, so that its cells are nearly squares of side Delta. At every remap
+// each ring is turned by the angle its gas has moved since the last one, so that gas on circular orbits
+// lands on its new site exactly and the remap sees only the deviation from the mean flow (as FARGO's
+// orbital advection does for a grid, Masset 2000). The new cells are the Voronoi cells of the new sites:
+// polygons, no two alike, that change from remap to remap as the rings turn against each other.
+#include "rsph/core/dimension.hpp"
+#include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
+#include "rsph/geometry/polygon.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace rsph::lattice {
+
+/// The sites of a Rings lattice at one remap: the rings in use, each turned by its phase, and once
+/// build_cells has run, every site's Voronoi cell and what the candidate lookup needs of each ring.
+/// Sites are numbered ring by ring from the innermost, each ring counter-clockwise.
+struct RingSites {
+  double spacing = 0.0;
+  std::int64_t first_ring = 0;          ///< the lattice's index of the innermost ring here
+  std::vector<double> radius, phase;    ///< per ring: r_i, and the angle site 0 lies half a step past
+  std::vector<std::size_t> offset{0};   ///< per ring and one past the last: its first site's number
+  std::vector<std::size_t> cell_start;  ///< per site and one past the last: its first vertex
+  std::vector<Vec<2>> vertices;         ///< every cell's vertices, relative to its site, counter-clockwise
+  /// Per ring: the least and largest distance of its cells from the origin, and the most any cell reaches
+  /// in angle (seen from the origin) from its site's angle; pi where a cell holds the origin.
+  std::vector<double> reach_lo, reach_hi, reach_angle;
+  std::size_t n_cells = 0;
+
+  std::size_t rings() const { return radius.size(); }
+  std::int64_t sites_on(std::size_t k) const { return static_cast<std::int64_t>(offset[k + 1] - offset[k]); }
+  double step(std::size_t k) const { return 2.0 * std::numbers::pi / static_cast<double>(sites_on(k)); }
+  double angle(std::size_t k, std::int64_t j) const { return phase[k] + (static_cast<double>(j) + 0.5) * step(k); }
+  std::size_t ring_of(std::size_t c) const {
+    return static_cast<std::size_t>(std::upper_bound(offset.begin(), offset.end(), c) - offset.begin()) - 1;
+  }
+  Vec<2> site(std::size_t c) const {
+    const std::size_t k = ring_of(c);
+    const double a = angle(k, static_cast<std::int64_t>(c - offset[k]));
+    return radius[k] * Vec<2>(std::cos(a), std::sin(a));
+  }
+  /// The site of ring k nearest in angle to phi (wrapped into the ring).
+  std::int64_t nearest(std::size_t k, double phi) const {
+    const auto n = sites_on(k);
+    const auto j = static_cast<std::int64_t>(std::floor((phi - phase[k]) / step(k)));
+    return ((j % n) + n) % n;
+  }
+  /// The area of the ring's band a cell stands for, 2 pi r_i Delta / N_i: what a full cell holds (the cells of
+  /// the outermost and innermost rings reach beyond their band to take in any gas out there).
+  double nominal_area(std::size_t c) const {
+    const std::size_t k = ring_of(c);
+    return step(k) * radius[k] * spacing;
+  }
+  /// Cell c relative to `origin`.
+  geometry::ConvexPolygon cell(std::size_t c, const Vec<2>& origin) const {
+    geometry::ConvexPolygon out;
+    const Vec<2> shift = site(c) - origin;
+    for (std::size_t v = cell_start[c]; v < cell_start[c + 1]; ++v) out.push(vertices[v] + shift);
+    return out;
+  }
+  /// f(g) for the sites next to c: its two neighbours on its ring and the three nearest on each ring beside.
+  template <class F>
+  void for_each_neighbour(std::size_t c, F&& f) const {
+    const std::size_t k = ring_of(c);
+    const auto j = static_cast<std::int64_t>(c - offset[k]), n = sites_on(k);
+    f(offset[k] + static_cast<std::size_t>((j + 1) % n));
+    f(offset[k] + static_cast<std::size_t>((j + n - 1) % n));
+    const double phi = angle(k, j);
+    for (const std::size_t m : {k - 1, k + 1}) {
+      if (m >= rings()) continue;  // k - 1 wraps past zero for the innermost ring
+      const auto near = nearest(m, phi), nm = sites_on(m);
+      for (std::int64_t d = -1; d <= 1; ++d) f(offset[m] + static_cast<std::size_t>(((near + d) % nm + nm) % nm));
+    }
+  }
+  /// f(c) for every site whose cell may overlap the polygon `p` (relative to xo): the rings whose radial
+  /// reach meets p's, and on each the sites whose angular reach meets p's. A lookup by ring and angle.
+  template <class F>
+  void for_each_candidate(const geometry::ConvexPolygon& p, const Vec<2>& xo, F&& f) const;
+  /// Every site's Voronoi cell among the sites (see the definition below).
+  void build_cells(double edge_extent);
+};
+
+namespace detail {
+/// The extent of polygon p (relative to xo) seen from the origin: the least and largest distance, and the
+/// angles of its vertices relative to the direction `towards` (in (-pi, pi]); pi both ways where p holds
+/// the origin.
+struct PolarExtent {
+  double r_lo = 0.0, r_hi = 0.0, angle_lo = 0.0, angle_hi = 0.0;
+};
+inline PolarExtent polar_extent(const geometry::ConvexPolygon& p, const Vec<2>& xo, const Vec<2>& towards) {
+  PolarExtent e;
+  e.r_lo = std::numeric_limits<double>::max();
+  bool inside = p.n >= 3;
+  const double scale = towards.norm();
+  for (int i = 0, j = p.n - 1; i < p.n; j = i++) {
+    const Vec<2> a = p[j] + xo, b = p[i] + xo, ab = b - a;
+    inside &= ab.x() * (-a.y()) - ab.y() * (-a.x()) > 0.0;  // the origin left of every edge
+    const double t = ab.squaredNorm() > 0.0 ? std::clamp(-a.dot(ab) / ab.squaredNorm(), 0.0, 1.0) : 0.0;
+    e.r_lo = std::min(e.r_lo, (a + t * ab).norm());
+    const double r = b.norm();
+    e.r_hi = std::max(e.r_hi, r);
+    if (r <= 1e-12 * scale) continue;  // a vertex on the origin has no angle (a wedge's tip)
+    const double ang = std::atan2(towards.x() * b.y() - towards.y() * b.x(), towards.dot(b));
+    e.angle_lo = std::min(e.angle_lo, ang);
+    e.angle_hi = std::max(e.angle_hi, ang);
+  }
+  if (inside) {
+    e.r_lo = 0.0;
+    e.angle_lo = -std::numbers::pi;
+    e.angle_hi = std::numbers::pi;
+  }
+  return e;
+}
+}  // namespace detail
+
+/// Builds each cell by clipping a square of half-width 3 Delta (`edge_extent` on the innermost and outermost
+/// rings, whose cells take in everything beyond them) with the bisectors of the sites within two rings and
+/// three sites; an inner cell that reaches more than 1.2 Delta from its site could be cut by a site further
+/// away, and is refused.
+inline void RingSites::build_cells(double edge_extent) {
+  cell_start.assign(n_cells + 1, 0);
+  std::vector<geometry::ConvexPolygon> built(n_cells);  // parallel first, then packed
+  const std::size_t n_rings = rings();
+  run_parallel(n_cells, [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t c = begin; c < end; ++c) {
+      const std::size_t k = ring_of(c);
+      const bool edge = k == 0 || k + 1 == n_rings;
+      const double half = edge ? std::max(edge_extent, 3.0 * spacing) : 3.0 * spacing;
+      geometry::ConvexPolygon cell = geometry::ConvexPolygon::rectangle(-half, -half, half, half);
+      const Vec<2> x = site(c);
+      const double phi = angle(k, static_cast<std::int64_t>(c - offset[k]));
+      for (std::size_t m = k >= 2 ? k - 2 : 0; m <= std::min(k + 2, n_rings - 1); ++m) {
+        const auto near = nearest(m, phi), nm = sites_on(m);
+        for (std::int64_t d = -3; d <= 3; ++d) {
+          const std::size_t b = offset[m] + static_cast<std::size_t>(((near + d) % nm + nm) % nm);
+          if (b == c) continue;
+          const Vec<2> dx = site(b) - x;
+          geometry::clip_halfplane(cell, dx, 0.5 * dx.squaredNorm());
+        }
+      }
+      if (!edge && geometry::max_radius(cell, Vec<2>::Zero()) > 1.2 * spacing)
+        throw NumericalError("rings lattice: the cell of site " + std::to_string(c) + " on the ring at r = " +
+                             std::to_string(radius[k]) + " reaches beyond 1.2 Delta; too few sites on the ring?");
+      built[c] = cell;
+    }
+  });
+  for (std::size_t c = 0; c < n_cells; ++c) cell_start[c + 1] = cell_start[c] + static_cast<std::size_t>(built[c].n);
+  vertices.resize(cell_start[n_cells]);
+  reach_lo.assign(n_rings, std::numeric_limits<double>::max());
+  reach_hi.assign(n_rings, 0.0);
+  reach_angle.assign(n_rings, 0.0);
+  for (std::size_t c = 0; c < n_cells; ++c) {
+    for (int v = 0; v < built[c].n; ++v) vertices[cell_start[c] + static_cast<std::size_t>(v)] = built[c][v];
+    const std::size_t k = ring_of(c);
+    const Vec<2> x = site(c);
+    const auto e = detail::polar_extent(built[c], x, x);
+    reach_lo[k] = std::min(reach_lo[k], e.r_lo);
+    reach_hi[k] = std::max(reach_hi[k], e.r_hi);
+    reach_angle[k] = std::max({reach_angle[k], -e.angle_lo, e.angle_hi});
+  }
+}
+
+template <class F>
+void RingSites::for_each_candidate(const geometry::ConvexPolygon& p, const Vec<2>& xo, F&& f) const {
+  const Vec<2> towards = xo.squaredNorm() > 0.0 ? xo : Vec<2>(1.0, 0.0);
+  const auto e = detail::polar_extent(p, xo, towards);
+  const double phi_o = std::atan2(towards.y(), towards.x());
+  const double margin = 1e-9 * spacing;
+  const auto n_rings = static_cast<std::int64_t>(rings());
+  auto ring_at = [&](double r) {
+    const auto i = static_cast<std::int64_t>(std::floor((r - radius[0]) / spacing + 0.5));
+    return std::clamp<std::int64_t>(i, 0, n_rings - 1);
+  };
+  for (std::int64_t ki = std::max<std::int64_t>(0, ring_at(e.r_lo) - 2);
+       ki <= std::min(n_rings - 1, ring_at(e.r_hi) + 2); ++ki) {
+    const auto k = static_cast<std::size_t>(ki);
+    if (reach_lo[k] > e.r_hi + margin || reach_hi[k] < e.r_lo - margin) continue;
+    const auto n = sites_on(k);
+    const double wide = reach_angle[k] + 1e-9;
+    const double lo = phi_o + e.angle_lo - wide, hi = phi_o + e.angle_hi + wide;
+    if (hi - lo >= 2.0 * std::numbers::pi - step(k)) {
+      for (std::int64_t j = 0; j < n; ++j) f(offset[k] + static_cast<std::size_t>(j));
+      continue;
+    }
+    // sites whose angle phase + (j + 1/2) step lies in [lo, hi]
+    const auto j_lo = static_cast<std::int64_t>(std::ceil((lo - phase[k]) / step(k) - 0.5));
+    const auto j_hi = static_cast<std::int64_t>(std::floor((hi - phase[k]) / step(k) - 0.5));
+    for (std::int64_t j = j_lo; j <= j_hi; ++j) f(offset[k] + static_cast<std::size_t>(((j % n) + n) % n));
+  }
+}
+
+/// The orbit-following lattice: rings of width Delta from r_in outwards (to r_out, or without end).
+struct Rings {
+  static constexpr int dim = 2;
+  /// Every site owns a cell of its own (no shape moved from site to site): the remap asks the sites for their
+  /// cells and candidates (RingSites) instead of an index range.
+  static constexpr bool per_site_cells = true;
+  double spacing = 0.0;
+  double r_in = 0.0;                                       ///< the innermost ring's inner edge
+  double r_out = std::numeric_limits<double>::infinity();  ///< the outermost ring's outer edge (infinite: none)
+
+  void validate() const {
+    require(spacing > 0.0, "rings lattice: the spacing Delta must be positive");
+    require(r_in >= spacing, "rings lattice: the inner edge must lie at least Delta from the centre (got r_in = " +
+                                 std::to_string(r_in) + ", Delta = " + std::to_string(spacing) + ")");
+    require(r_out > r_in + spacing * (1.0 - 1e-9), "rings lattice: need at least one ring between r_in and r_out");
+  }
+  /// How many rings fit between r_in and r_out (rounded; the largest int64 without an outer edge).
+  std::int64_t ring_count() const {
+    if (!std::isfinite(r_out)) return std::numeric_limits<std::int64_t>::max() / 2;
+    return std::max<std::int64_t>(1, std::llround((r_out - r_in) / spacing));
+  }
+  double radius(std::int64_t i) const { return r_in + (static_cast<double>(i) + 0.5) * spacing; }
+  std::int64_t sites_on(std::int64_t i) const {
+    return std::max<std::int64_t>(3, std::llround(2.0 * std::numbers::pi * radius(i) / spacing));
+  }
+  /// The ring whose band holds radius r (not clamped).
+  std::int64_t ring_at(double r) const { return static_cast<std::int64_t>(std::floor((r - r_in) / spacing)); }
+
+  /// Rings first..last (clamped to the lattice), unturned: the sites a scene starts on.
+  RingSites sites(std::int64_t first, std::int64_t last) const {
+    validate();
+    first = std::max<std::int64_t>(first, 0);
+    last = std::min(last, ring_count() - 1);
+    require(first <= last, "rings lattice: no ring in the range asked for");
+    RingSites s;
+    s.spacing = spacing;
+    s.first_ring = first;
+    for (std::int64_t i = first; i <= last; ++i) {
+      s.radius.push_back(radius(i));
+      s.phase.push_back(0.0);
+      s.offset.push_back(s.offset.back() + static_cast<std::size_t>(sites_on(i)));
+    }
+    s.n_cells = s.offset.back();
+    return s;
+  }
+  /// The sites gas at x (masses m) is remapped onto: the rings whose bands hold gas, from the innermost to the
+  /// outermost (whose cells take in the gas beyond them), each
+  /// turned to its gas's mass-weighted mean phase (the circular mean of N_i phi over the gas in its band,
+  /// which is where the ring's sites have moved to modulo a site: Omega_i T for gas on circular orbits, with
+  /// the integrator's phase error included); a ring without gas keeps phase 0. `reach`: how far an old cell
+  /// may reach beyond its particle (the edge rings' cells take in everything that far out).
+  RingSites following(std::span<const Vec<2>> x, std::span<const double> m, double reach) const {
+    require(!x.empty(), "rings lattice: no gas to follow");
+    double g_lo = std::numeric_limits<double>::max(), g_hi = 0.0;
+    for (const auto& xa : x) {
+      g_lo = std::min(g_lo, xa.norm());
+      g_hi = std::max(g_hi, xa.norm());
+    }
+    RingSites s = sites(ring_at(g_lo), ring_at(g_hi));
+    std::vector<std::complex<double>> sum(s.rings(), 0.0);
+    for (std::size_t a = 0; a < x.size(); ++a) {
+      const std::int64_t k = ring_at(x[a].norm()) - s.first_ring;
+      if (k < 0 || k >= static_cast<std::int64_t>(s.rings())) continue;
+      const auto kk = static_cast<std::size_t>(k);
+      sum[kk] += m[a] * std::polar(1.0, static_cast<double>(s.sites_on(kk)) * std::atan2(x[a].y(), x[a].x()));
+    }
+    for (std::size_t k = 0; k < s.rings(); ++k)
+      if (std::abs(sum[k]) > 0.0)
+        s.phase[k] = (std::arg(sum[k]) - std::numbers::pi) / static_cast<double>(s.sites_on(k));
+    const double beyond = std::max(0.0, s.radius.front() - g_lo) + std::max(0.0, g_hi - s.radius.back());
+    s.build_cells(beyond + reach + 3.0 * spacing);
+    return s;
+  }
+};
+
+}  // namespace rsph::lattice
