@@ -92,7 +92,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("resolution", resolution, "low (48 000 particles), med (108 000) or high (191 000)");
   flag("h-over-dx", s.h_over_dx, "RSPH: h / Delta; SPH: eta");
   flag("lattice", s.lattice,
-       "square or hexagonal: the start and RSPH's regularization lattice (the same particle count)");
+       "square, hexagonal or rings (orbit-following: rings of width Delta turned with their gas at every "
+       "remap): the start and RSPH's regularization lattice (the same particle count)");
   flag("orbits", s.orbits, "planet orbits to run");
   flag("zone-width", s.zone_width, "width of the boundary zones on fixed orbits at both edges");
   flag("courant", s.courant, "time-step Courant factor");

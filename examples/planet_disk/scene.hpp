@@ -4,6 +4,7 @@
 // isothermal with c_s / v_K = 0.05 or polytropic (eq. 21). Gas in [0.4, 0.5] and [2.4, 2.5] moves on
 // fixed circular orbits. RSPH without artificial viscosity (h/Delta = 1.4, Appendix A's adaptive
 // regularization) or equal-mass grad-h SPH with artificial viscosity, on the same initial lattice.
+#include "common/disk_sites.hpp"
 #include "common/runner.hpp"
 #include "rsph/paper/disk.hpp"
 #include "rsph/paper/keplerian_zones.hpp"
@@ -25,7 +26,7 @@ struct PlanetDiskParams {
   std::string method = "rsph";     ///< rsph: regularized, no artificial viscosity; sph: grad-h SPH
   double particles = 48000;        ///< target particle count over the disk (LOW 48 000, MED 108 000, HIGH 191 000)
   double h_over_dx = 1.4;          ///< RSPH: h / Delta; SPH: eta of h = eta (m / rho)^(1/2)
-  std::string lattice = "square";  ///< the lattice of the start and of RSPH's regularization: square or hexagonal
+  std::string lattice = "square";  ///< the lattice of the start and of RSPH's regularization: square, hexagonal, rings
   std::string remap = "first";     ///< RSPH: the remap's order, first (eqs. 6-9) or second
   double orbits = 100.0;           ///< planet orbits to run
   double r_in = 0.4, r_out = 2.5;  ///< the disk
@@ -51,8 +52,8 @@ struct PlanetDiskParams {
             "planet disk: unknown equation of state '" + eos + "' (isothermal, polytropic)");
     require(method == "rsph" || method == "sph", "planet disk: unknown method '" + method + "' (rsph, sph)");
     examples::check_remap(remap);
-    require(lattice == "square" || lattice == "hexagonal",
-            "planet disk: unknown lattice '" + lattice + "' (square, hexagonal)");
+    require(lattice == "square" || lattice == "hexagonal" || lattice == "rings",
+            "planet disk: unknown lattice '" + lattice + "' (square, hexagonal, rings)");
     require(particles >= 100.0, "planet disk: need at least 100 particles (got " + std::to_string(particles) + ")");
     require(h_over_dx > 0.0, "planet disk: h/dx must be positive (got " + std::to_string(h_over_dx) + ")");
     require(orbits > 0.0, "planet disk: the number of orbits must be positive");
@@ -69,10 +70,17 @@ struct PlanetDiskParams {
   }
   bool rsph() const { return method == "rsph"; }
   double area() const { return std::numbers::pi * (r_out * r_out - r_in * r_in); }
-  /// Delta for the particle count: the square's side, or the hexagonal lattice's nearest-neighbour distance
-  /// (cells of area sqrt(3)/2 Delta^2), so both lattices hold about `particles`.
+  /// Delta for the particle count: the square's side, the hexagonal lattice's nearest-neighbour distance
+  /// (cells of area sqrt(3)/2 Delta^2), or the rings' width, rounded so that whole rings fill the disk; every
+  /// lattice holds about `particles`.
   double spacing() const {
-    return std::sqrt(area() / particles / (lattice == "hexagonal" ? std::numbers::sqrt3 / 2.0 : 1.0));
+    const double d = std::sqrt(area() / particles / (lattice == "hexagonal" ? std::numbers::sqrt3 / 2.0 : 1.0));
+    if (lattice != "rings") return d;
+    return (r_out - r_in) / std::max(1.0, std::round((r_out - r_in) / d));
+  }
+  /// The boundary zones' width: on the rings lattice whole rings.
+  double zone() const {
+    return lattice == "rings" ? std::max(1.0, std::round(zone_width / spacing())) * spacing() : zone_width;
   }
   double h() const { return h_over_dx * spacing(); }
   paper::StarAndPlanet star_planet() const { return {1.0, q, 1.0, softening, ramp_orbits}; }
@@ -80,7 +88,7 @@ struct PlanetDiskParams {
   /// Pressure support: v_phi^2 = v_K^2 (1 - aspect^2 / Gamma) for Sigma uniform and P ~ Sigma / r, with
   /// Gamma = 1 for the isothermal and gamma for the polytropic disk (whose P starts at c_s^2 Sigma / gamma).
   double v_factor() const { return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0)); }
-  paper::KeplerianZones zones() const { return {1.0, r_in + zone_width, r_out - zone_width, v_factor()}; }
+  paper::KeplerianZones zones() const { return {1.0, r_in + zone(), r_out - zone(), v_factor()}; }
   Box<2> box() const {
     Box<2> b;
     b.lo = Vec<2>(-r_out - 1.0, -r_out - 1.0);
@@ -122,27 +130,24 @@ struct DiskPolytropicK {
 template <class Lattice>
 ParticleSet<2, false> disk_particles_on(const PlanetDiskParams& s, const Lattice& lat) {
   s.validate();
-  constexpr bool hexagonal = std::is_same_v<Lattice, lattice::Hexagonal>;
-  const double bias = !s.rsph()   ? 1.0
-                      : hexagonal ? kernel::hexagonal_lattice_sum<kernel::CubicSpline>(s.h_over_dx)
-                                  : kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
-  const Box<2> box = s.box();
-  const auto range = lat.cells_touching(box, Vec<2>(-s.r_out, -s.r_out), Vec<2>(s.r_out, s.r_out));
+  const double bias = s.rsph() ? examples::lattice_bias<kernel::CubicSpline, Lattice>(s.h_over_dx) : 1.0;
   const auto zones = s.zones();
   ParticleSet<2, false> p;
-  for (std::int64_t j = range.lo[1]; j <= range.hi[1]; ++j)
-    for (std::int64_t i = range.lo[0]; i <= range.hi[0]; ++i) {
-      const Vec<2> x = lat.site(box, {i, j});
-      const double r = x.norm();
-      if (r < s.r_in || r > s.r_out) continue;
-      p.add(s.sigma0 * lat.cell_volume() / bias, x, zones.velocity(x), s.h());
-    }
+  examples::for_each_site_in_annulus(lat, s.box(), s.r_in, s.r_out, [&](const Vec<2>& x, double area) {
+    p.add(s.sigma0 * area / bias, x, zones.velocity(x), s.h());
+  });
   require(p.n_real > 0, "planet disk: the annulus holds no lattice site");
   return p;
 }
+/// The scene's lattice: f(lattice) for the one named (rings from r_in to r_out).
+template <class F>
+auto with_disk_lattice(const PlanetDiskParams& s, F&& f) {
+  if (s.lattice == "hexagonal") return f(lattice::Hexagonal{s.spacing()});
+  if (s.lattice == "rings") return f(lattice::Rings{s.spacing(), s.r_in, s.r_out});
+  return f(lattice::Square{s.spacing()});
+}
 inline ParticleSet<2, false> disk_particles(const PlanetDiskParams& s) {
-  if (s.lattice == "hexagonal") return disk_particles_on(s, lattice::Hexagonal{s.spacing()});
-  return disk_particles_on(s, lattice::Square{s.spacing()});
+  return with_disk_lattice(s, [&](const auto& lat) { return disk_particles_on(s, lat); });
 }
 
 /// One measurement of the disk.
@@ -257,12 +262,15 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
 
 }  // namespace detail
 
-/// The scene's methods: RSPH with Appendix A's schedule and the annulus closing the edge cells, and
-/// equal-mass grad-h SPH with artificial viscosity; both with the star and planet and the boundary zones.
+/// The scene's methods: RSPH with Appendix A's schedule and the annulus closing the edge cells (on the rings
+/// lattice the edges are rings, whose cells take in what lies beyond: no region), and equal-mass grad-h SPH
+/// with artificial viscosity; both with the star and planet and the boundary zones.
 using DiskKernel = kernel::CubicSpline;
+template <class Lattice>
+using DiskRegion = std::conditional_t<PerSiteLattice<Lattice>, region::Unbounded, region::Annulus>;
 template <class Lattice, class Order = regularize::FirstOrder>
 using DiskRegularizer = regularize::LatticeRegularizer<Lattice, schedule::Adaptive<DiskKernel, 2>,
-                                                       geometry::LocalVoronoi, region::Annulus, Order>;
+                                                       geometry::LocalVoronoi, DiskRegion<Lattice>, Order>;
 template <class Lattice, class EOS, class Order = regularize::FirstOrder>
 using RsphDisk =
     Simulation<2, DiskKernel, EOS, DiskRegularizer<Lattice, Order>, paper::StarAndPlanet, paper::KeplerianZones>;
@@ -278,6 +286,14 @@ inline TimeStepParams disk_time_steps(const PlanetDiskParams& s) {
   return ts;
 }
 
+template <class Lattice>
+DiskRegion<Lattice> disk_region(const PlanetDiskParams& s) {
+  if constexpr (PerSiteLattice<Lattice>)
+    return {};
+  else
+    return region::Annulus{s.r_in, s.r_out};
+}
+
 template <class Lattice, class EOS, class Order = regularize::FirstOrder>
 RsphDisk<Lattice, EOS, Order> make_rsph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Order order = {}) {
   // Edge cells are closed at 0.75 Delta along the edge and by the disk's circles across it, and a new
@@ -285,7 +301,7 @@ RsphDisk<Lattice, EOS, Order> make_rsph_disk(const PlanetDiskParams& s, const La
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
   DiskRegularizer<Lattice, Order> reg(
       lat, schedule::Adaptive<DiskKernel, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)},
-      {.remap = remap, .region = region::Annulus{s.r_in, s.r_out}, .order = order});
+      {.remap = remap, .region = disk_region<Lattice>(s), .order = order});
   return RsphDisk<Lattice, EOS, Order>(disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg),
                                        disk_time_steps(s), s.star_planet(), s.zones());
 }
@@ -313,8 +329,7 @@ auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& r
 /// with_method on the scene's lattice.
 template <class EOS, class Run>
 auto on_lattice(const PlanetDiskParams& s, EOS eos, Run&& run) {
-  if (s.lattice == "hexagonal") return with_method(s, lattice::Hexagonal{s.spacing()}, std::move(eos), run);
-  return with_method(s, lattice::Square{s.spacing()}, std::move(eos), run);
+  return with_disk_lattice(s, [&](const auto& lat) { return with_method(s, lat, eos, run); });
 }
 
 }  // namespace detail

@@ -41,7 +41,8 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("viscosity", s.viscosity,
        "mg: Monaghan-Gingold with alpha from nu_s (the paper); ns: Navier-Stokes stress tensor");
   flag("lattice", s.lattice,
-       "regularization lattice: square (the paper's) or hexagonal (Delta the nearest-neighbour distance)");
+       "regularization lattice: square (the paper's), hexagonal (Delta the nearest-neighbour distance) or rings "
+       "(orbit-following: rings of width Delta from the accretion radius, turned with their gas at every remap)");
   flag("taus", taus, "snapshot times tau* (comma separated)");
   flag("sigma-floor", s.sigma_floor, "initial annulus: where Sigma exceeds this fraction of its peak");
   flag("inner-radius", s.inner_radius, "accretion radius (R_0)");

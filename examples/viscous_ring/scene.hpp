@@ -4,6 +4,7 @@
 // the annulus where Sigma(tau*_0 = 0.018) is above a floor, with masses from eq. (16) and velocities
 // from eqs. (17)-(18); snapshots at the paper's tau*, each fitted by eq. (16) for an effective
 // viscous time and so an effective viscosity nu_eff.
+#include "common/disk_sites.hpp"
 #include "common/runner.hpp"
 #include "rsph/paper/viscous_ring.hpp"
 #include "rsph/rsph.hpp"
@@ -29,7 +30,7 @@ struct ViscousRingParams {
   double inner_radius = 0.1;       ///< particles inside are accreted by the central mass (removed, counted)
   std::string viscosity = "mg";    ///< mg: Monaghan-Gingold with Meglicki's alpha; ns: Navier-Stokes stress
   std::string remap = "first";     ///< RSPH: the remap's order, first (eqs. 6-9) or second
-  std::string lattice = "square";  ///< the regularization lattice: square (the paper's) or hexagonal
+  std::string lattice = "square";  ///< the regularization lattice: square (the paper's), hexagonal or rings
   double bin_width = 0.01;         ///< radial bins of the azimuthal average (R_0)
   double force = 0.25;             ///< time-step force factor
   int max_bin = 0;                 ///< mg: individual time steps in 2^max_bin bins (0: one global step)
@@ -45,8 +46,10 @@ struct ViscousRingParams {
             "viscous ring: snapshot times tau* must increase and follow tau*_0 = " + std::to_string(tau0));
     require(sigma_floor > 0.0 && sigma_floor < 1.0, "viscous ring: the initial floor must lie in (0, 1)");
     require(viscosity == "mg" || viscosity == "ns", "viscous ring: unknown viscosity '" + viscosity + "' (mg, ns)");
-    require(lattice == "square" || lattice == "hexagonal",
-            "viscous ring: unknown lattice '" + lattice + "' (square, hexagonal)");
+    require(lattice == "square" || lattice == "hexagonal" || lattice == "rings",
+            "viscous ring: unknown lattice '" + lattice + "' (square, hexagonal, rings)");
+    require(lattice != "rings" || inner_radius >= spacing(),
+            "viscous ring: the rings lattice starts at the accretion radius, which must be at least Delta");
     require(bin_width > 0.0, "viscous ring: the radial bin width must be positive");
     require(inner_radius >= 0.0, "viscous ring: the accretion radius must be non-negative");
     require(max_bin >= 0 && max_bin <= 12, "viscous ring: max_bin must lie in [0, 12]");
@@ -83,27 +86,26 @@ ParticleSet<2, false> ring_particles_on(const ViscousRingParams& s, const Lattic
   s.validate();
   const auto ring = s.ring();
   const auto [x_in, x_out] = s.annulus();
-  constexpr bool hexagonal = std::is_same_v<Lattice, lattice::Hexagonal>;
-  const double bias = hexagonal ? kernel::hexagonal_lattice_sum<kernel::CubicSpline>(s.h_over_dx)
-                                : kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
-  const Box<2> box = s.box();
-  const auto range = lat.cells_touching(box, Vec<2>(-x_out, -x_out), Vec<2>(x_out, x_out));
+  const double bias = examples::lattice_bias<kernel::CubicSpline, Lattice>(s.h_over_dx);
   ParticleSet<2, false> p;
-  for (std::int64_t j = range.lo[1]; j <= range.hi[1]; ++j)
-    for (std::int64_t i = range.lo[0]; i <= range.hi[0]; ++i) {
-      const Vec<2> x = lat.site(box, {i, j});
-      const double R = x.norm();
-      if (R < x_in || R > x_out) continue;
-      const Vec<2> e_R = x / R, e_phi(-e_R[1], e_R[0]);
-      const Vec<2> v = ring.v_phi(R) * e_phi + ring.v_R(s.tau0, R) * e_R;
-      p.add(ring.sigma(s.tau0, R) * lat.cell_volume() / bias, x, v, s.h);
-    }
+  examples::for_each_site_in_annulus(lat, s.box(), x_in, x_out, [&](const Vec<2>& x, double area) {
+    const double R = x.norm();
+    const Vec<2> e_R = x / R, e_phi(-e_R[1], e_R[0]);
+    const Vec<2> v = ring.v_phi(R) * e_phi + ring.v_R(s.tau0, R) * e_R;
+    p.add(ring.sigma(s.tau0, R) * area / bias, x, v, s.h);
+  });
   require(p.n_real > 0, "viscous ring: the annulus holds no lattice site (h too large?)");
   return p;
 }
+/// The scene's lattice: f(lattice) for the one named.
+template <class F>
+auto with_ring_lattice(const ViscousRingParams& s, F&& f) {
+  if (s.lattice == "hexagonal") return f(lattice::Hexagonal{s.spacing()});
+  if (s.lattice == "rings") return f(lattice::Rings{s.spacing(), s.inner_radius});
+  return f(lattice::Square{s.spacing()});
+}
 inline ParticleSet<2, false> ring_particles(const ViscousRingParams& s) {
-  if (s.lattice == "hexagonal") return ring_particles_on(s, lattice::Hexagonal{s.spacing()});
-  return ring_particles_on(s, lattice::Square{s.spacing()});
+  return with_ring_lattice(s, [&](const auto& lat) { return ring_particles_on(s, lat); });
 }
 
 /// Azimuthal statistics of Sigma (the particles' SPH density) in radial bins.
@@ -239,7 +241,7 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
 
 }  // namespace detail
 
-/// The scene's methods: RSPH regularized every c_r cycles on a square or hexagonal lattice, and plain SPH
+/// The scene's methods: RSPH regularized every c_r cycles on a square, hexagonal or rings lattice, and plain SPH
 /// (c_r = 0), each with Monaghan-Gingold or Navier-Stokes viscosity, about a point-mass star.
 using RingKernel = kernel::CubicSpline;
 template <class Lattice, class Order = regularize::FirstOrder>
@@ -267,6 +269,8 @@ Viscosity ring_viscosity(const ViscousRingParams& s) {
     return Viscosity{s.nu};
   else if constexpr (std::is_same_v<Lattice, lattice::Hexagonal>)
     return Viscosity::on_hexagonal_lattice(s.nu, s.h_over_dx);
+  else if constexpr (std::is_same_v<Lattice, lattice::Rings>)
+    return Viscosity::on_sheared_rows(s.nu, s.h_over_dx);
   else
     return Viscosity::on_square_lattice(s.nu, s.h_over_dx);
 }
@@ -312,9 +316,8 @@ template <class OnStep, class OnSnapshot>
 RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot,
                          examples::Checkpoints* checkpoints = nullptr) {
   s.validate();
-  if (s.lattice == "hexagonal")
-    return detail::run_viscous_ring_on(s, lattice::Hexagonal{s.spacing()}, on_step, on_snapshot, checkpoints);
-  return detail::run_viscous_ring_on(s, lattice::Square{s.spacing()}, on_step, on_snapshot, checkpoints);
+  return with_ring_lattice(
+      s, [&](const auto& lat) { return detail::run_viscous_ring_on(s, lat, on_step, on_snapshot, checkpoints); });
 }
 
 }  // namespace rsph::scenes

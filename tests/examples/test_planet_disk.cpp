@@ -84,6 +84,20 @@ TEST_CASE("planet disk: the initial lattice disk holds Sigma_0 and sits in equil
     if (hexagonal.r[i] > 0.6 && hexagonal.r[i] < 2.3) CHECK(std::abs(hexagonal.sigma[i] - 1.0) < 0.01);
 }
 
+TEST_CASE("planet disk on the rings lattice: whole rings hold the particle count and Sigma_0", "[examples][disk]") {
+  scenes::PlanetDiskParams s;
+  s.particles = 8000;
+  s.lattice = "rings";
+  const auto p = scenes::disk_particles(s);
+  CHECK(std::abs(static_cast<double>(p.n_real) / 8000.0 - 1.0) < 0.02);
+  // whole rings between r_in and r_out, and whole rings in each Keplerian zone
+  CHECK(std::abs((s.r_out - s.r_in) / s.spacing() - std::round((s.r_out - s.r_in) / s.spacing())) < 1e-9);
+  CHECK(std::abs(s.zone() / s.spacing() - std::round(s.zone() / s.spacing())) < 1e-9);
+  const auto profile = scenes::disk_profile(p, s);
+  for (std::size_t i = 0; i < profile.r.size(); ++i)
+    if (profile.r[i] > 0.6 && profile.r[i] < 2.3) CHECK(std::abs(profile.sigma[i] - 1.0) < 0.01);
+}
+
 TEST_CASE("planet disk, reduced: mass kept, no NaN, and the gap deepens after the ramp", "[examples][disk]") {
   scenes::PlanetDiskParams s;
   s.particles = 8000;

@@ -54,4 +54,31 @@ double hexagonal_lattice_sum(double h_over_dx) {
   return std::numbers::sqrt3 / 2.0 * sum;
 }
 
+/// The integral of f(x) over [-R, R] by Simpson's rule (2000 intervals): a row of a lattice averaged over
+/// its offset.
+template <class F>
+double row_integral(double R, F&& f) {
+  constexpr int n = 2000;  // even
+  const double dx = 2.0 * R / n;
+  double sum = 0.0;
+  for (int i = 0; i <= n; ++i) sum += ((i == 0 || i == n) ? 1.0 : (i % 2 ? 4.0 : 2.0)) * f(-R + i * dx);
+  return sum * dx / 3.0;
+}
+
+/// The counterpart of lattice_sum<K, 2> for rows dx apart, each of sites dx apart, that slide past each other
+/// (lattice::Rings, its rings turned against each other by the shear): the particle's own row summed, every
+/// other row averaged over its offset, i.e. integrated along it. A scene that puts mass rho dx^2 / this on each
+/// site has SPH density rho on average.
+template <class K>
+requires SmoothingKernel<K, 2>
+double sheared_rows_lattice_sum(double h_over_dx) {
+  const double R = K::support * h_over_dx;
+  const int rows = static_cast<int>(std::ceil(R));
+  double sum = 0.0;
+  for (int i = -rows; i <= rows; ++i) sum += W<K, 2>(std::abs(i), h_over_dx);
+  for (int k = 1; k <= rows; ++k)
+    sum += 2.0 * row_integral(R, [&](double x) { return W<K, 2>(std::hypot(x, double(k)), h_over_dx); });
+  return sum;
+}
+
 }  // namespace rsph::kernel

@@ -63,6 +63,21 @@ double lattice_factor(double h_over_dx, double eta2, bool hexagonal) {
   });
   return sum / -0.25;
 }
+/// The same over rows that slide past each other (lattice::Rings under shear): the own row adds nothing (y = 0),
+/// every other row is averaged over its offset (kernel::sheared_rows_lattice_sum).
+template <class Kernel>
+double sheared_rows_lattice_factor(double h_over_dx, double eta2) {
+  const double dx = 1.0 / h_over_dx;  // h = 1
+  double sum = 0.0;
+  for (int k = 1; k <= static_cast<int>(std::ceil(Kernel::support * h_over_dx)); ++k) {
+    const double y = k * dx;
+    sum += 2.0 * dx * kernel::row_integral(Kernel::support, [&](double x) {
+             const double r = std::hypot(x, y);
+             return x * x * y * y * kernel::dW_dr<Kernel, 2>(r, 1.0) / (r * (r * r + eta2));
+           });
+  }
+  return sum / -0.25;
+}
 template <class Kernel>
 double square_lattice_factor(double h_over_dx, double eta2) {
   return lattice_factor<Kernel>(h_over_dx, eta2, false);
@@ -95,6 +110,10 @@ struct ShearViscosityMG {
   /// Calibrated for particles on a square lattice with the given h/Delta (2D).
   static ShearViscosityMG on_square_lattice(double nu_s, double h_over_dx, double eta2_ = 0.01) requires(D == 2) {
     return {nu_s, square_lattice_factor<Kernel>(h_over_dx, eta2_), eta2_};
+  }
+  /// Calibrated for particles on rings that slide past each other (lattice::Rings), Delta apart.
+  static ShearViscosityMG on_sheared_rows(double nu_s, double h_over_dx, double eta2_ = 0.01) requires(D == 2) {
+    return {nu_s, sheared_rows_lattice_factor<Kernel>(h_over_dx, eta2_), eta2_};
   }
   /// Calibrated for particles on a hexagonal lattice with the given h/Delta (Delta: nearest-neighbour distance).
   static ShearViscosityMG on_hexagonal_lattice(double nu_s, double h_over_dx, double eta2_ = 0.01) requires(D == 2) {
