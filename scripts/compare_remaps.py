@@ -3,7 +3,7 @@
 --remap first and --remap second (one thread per run, --jobs at a time; finished runs are kept), writes
 remaps.csv and remaps.md (one line per setting, each remap's error and cost) and draws error against cost,
 one point per run and a line per remap, for the ring, Kelvin-Helmholtz and the disk, plus the disk's azimuthal
-average over the FARGO3D profile of ../shared/reference/fargo3d.
+average over FARGO3D's converged profile (data/reference/fargo3d).
 
   compare_remaps.py --out out/remaps                       # every test, the settings below
   compare_remaps.py --out out/remaps --only ring,kh        # some of them
@@ -27,7 +27,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.ticker import FuncFormatter, NullFormatter  # noqa: E402
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from rsph_plot import FARGO3D_PROFILE as FARGO, read_csv, read_summary, run_example, save_figure  # noqa: E402
+from rsph_plot import FARGO3D_LABEL, FARGO3D_PROFILE as FARGO, read_csv, read_summary, run_example, save_figure  # noqa: E402
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 BIN = os.path.join(HERE, "..", "build", "bin")
@@ -150,7 +150,7 @@ def write_tables(a, results):
 def error_cost_chart(a, results):
     panels = [("ring", "|nu_eff / nu_s - 1| (labels: c_r, h/Delta)", lambda s: abs(s["nu_eff_over_nu_s"] - 1.0)),
               ("kh", "1 / amplification by tau_KH", lambda s: 1.0 / s["amplification"]),
-              ("disk", "gap depth Sigma / Sigma_0 (FARGO3D: 0.098)", lambda s: s["gap_depth"])]
+              ("disk", "gap depth Sigma / Sigma_0 (FARGO3D 768x256: 0.114)", lambda s: s["gap_depth"])]
     panels = [p for p in panels if any(k[0] == p[0] for k in results)]
     if not panels:
         return
@@ -188,7 +188,7 @@ def disk_profiles(a, results):
     fig, ax = plt.subplots(figsize=(7, 4.2))
     if os.path.exists(FARGO):
         ref = read_csv(FARGO)
-        ax.plot(ref["r"], ref["sigma_over_sigma0"], "k-", lw=2, label="FARGO3D, 49 152 cells, inviscid")
+        ax.plot(ref["r"], ref["sigma_over_sigma0"], "k-", lw=2, label=FARGO3D_LABEL + ", inviscid")
     for (name, st, order), (s, out) in sorted(runs):
         prof = read_csv(os.path.join(out, "profile.csv"))
         r_key = "r" if "r" in prof else list(prof)[0]

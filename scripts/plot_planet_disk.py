@@ -14,7 +14,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from rsph_plot import FARGO3D_PROFILE, folders_and_png, method_label, read_csv, read_summary, save_figure  # noqa: E402
+from rsph_plot import FARGO3D_LABEL, FARGO3D_PROFILE, folders_and_png, method_label, read_csv, read_summary, save_figure  # noqa: E402
 
 
 def label(summary):
@@ -64,7 +64,7 @@ def main():
                     label=f"{s['particle_updates_per_second'] / 1e6:.2f} M updates/s")
     if os.path.exists(FARGO3D_PROFILE):
         ref = read_csv(FARGO3D_PROFILE)
-        ax_avg.plot(ref["r"], ref["sigma_over_sigma0"], "k-", lw=1.5, label="FARGO3D, 49 152 cells, orbit 100")
+        ax_avg.plot(ref["r"], ref["sigma_over_sigma0"], "k-", lw=1.5, label=FARGO3D_LABEL + ", orbit 100")
         ax_avg.legend(fontsize=7)
     ax_cut.set_xlabel("r / a (phi = phi_p + pi)")
     ax_cut.set_ylabel("Sigma / Sigma_0")
