@@ -1,11 +1,11 @@
 // The regularization microbenchmarks: building all Voronoi cells (local half-plane builder vs
 // Boost.Polygon) and the full remap (cells, overlaps, new particles), on a jittered lattice and on a
 // lattice sheared as by Keplerian rotation, and the full remap against the jitter's amplitude (the cost of
-// disorder), a Keplerian disk with open edges as the planet-disk test remaps it, and the remap onto a hexagonal
-// lattice; and the second-order remap (remap_second/...) on the sets of remap/.... In 3D: the remap of a
-// jittered or sheared cubic lattice (remap3d/..., remap3d_second/...), its Voronoi cells alone (cells_local3d/...) and,
-// when voro++ is installed, the same cells by voro++ alone (cells_voro/...). items_per_second = old particles per
-// second.
+// disorder), a Keplerian disk with open edges as the planet-disk test remaps it, on the square lattice and on the
+// orbit-following rings (both orders), and the remap onto a hexagonal lattice; and the second-order remap
+// (remap_second/...) on the sets of remap/.... In 3D: the remap of a jittered or sheared cubic lattice (remap3d/...,
+// remap3d_second/...), its Voronoi cells alone (cells_local3d/...) and, when voro++ is installed, the same cells by
+// voro++ alone (cells_voro/...). items_per_second = old particles per second.
 #include "rsph/rsph.hpp"
 
 #include "bench_common.hpp"
@@ -17,9 +17,12 @@
 #endif
 
 #include <initializer_list>
+#include <limits>
 #include <numbers>
 #include <random>
 #include <string>
+#include <type_traits>
+#include <vector>
 
 using namespace rsph;
 using bench::domain;
@@ -88,33 +91,47 @@ void BM_remap_disorder(benchmark::State& state) {
   time_remaps(state, p0, square);
 }
 
-// A disk as the planet-disk test remaps it: a square lattice in the annulus 0.4 <= r <= 2.5, rotated at the
-// Keplerian angular velocity r^-1.5 for `range(1)` tenths of a time unit (at the test's usual interval of
-// about one unit, neighbouring rows have slid by 1.5 spacings), isothermal, open edges, cells closed at
-// 0.75 spacings and by the annulus. Arguments: {particles, rotation time in tenths, threads}.
+// A disk as the planet-disk test remaps it: the annulus 0.4 <= r <= 2.5 filled from the square lattice (or
+// the rings lattice's unturned sites, `Rings`), rotated at the Keplerian angular velocity r^-1.5 for
+// `range(1)` tenths of a time unit (at the test's usual interval of about one unit, neighbouring rows have
+// slid by 1.5 spacings), isothermal, open edges, cells closed at 0.75 spacings (and by the annulus on the
+// square lattice), remapped onto the lattice it started on. Arguments: {particles, rotation time in tenths,
+// threads}.
+template <class Lattice, class Order = regularize::FirstOrder>
 void BM_remap_disk(benchmark::State& state) {
   bench::use_threads(state);
   constexpr double r_in = 0.4, r_out = 2.5, h_over_dx = 1.4;
-  const double dx = std::sqrt(std::numbers::pi * (r_out * r_out - r_in * r_in) / static_cast<double>(state.range(0)));
+  double dx = std::sqrt(std::numbers::pi * (r_out * r_out - r_in * r_in) / static_cast<double>(state.range(0)));
   const double t = static_cast<double>(state.range(1)) / 10.0;
+  std::vector<Vec<2>> sites;
+  if constexpr (std::is_same_v<Lattice, lattice::Rings>) {
+    dx = (r_out - r_in) / std::round((r_out - r_in) / dx);
+    const auto s = lattice::Rings{dx, r_in, r_out}.sites(0, std::numeric_limits<std::int64_t>::max());
+    for (std::size_t c = 0; c < s.n_cells; ++c) sites.push_back(s.site(c));
+  } else {
+    const auto n_side = static_cast<int>(std::ceil(r_out / dx));
+    for (int j = -n_side; j < n_side; ++j)
+      for (int i = -n_side; i < n_side; ++i)
+        if (const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx); x.norm() >= r_in && x.norm() <= r_out) sites.push_back(x);
+  }
   ParticleSet<2, false> p0;
-  const auto n_side = static_cast<int>(std::ceil(r_out / dx));
-  for (int j = -n_side; j < n_side; ++j)
-    for (int i = -n_side; i < n_side; ++i) {
-      const Vec<2> x((i + 0.5) * dx, (j + 0.5) * dx);
-      const double r = x.norm();
-      if (r < r_in || r > r_out) continue;
-      const double omega = std::pow(r, -1.5), phi = omega * t;
-      const Vec<2> rotated(std::cos(phi) * x.x() - std::sin(phi) * x.y(),
-                           std::sin(phi) * x.x() + std::cos(phi) * x.y());
-      p0.add(dx * dx, rotated, omega * Vec<2>(-rotated.y(), rotated.x()), h_over_dx * dx);
-    }
+  for (const Vec<2>& x : sites) {
+    const double omega = std::pow(x.norm(), -1.5), phi = omega * t;
+    const Vec<2> rotated(std::cos(phi) * x.x() - std::sin(phi) * x.y(), std::sin(phi) * x.x() + std::cos(phi) * x.y());
+    p0.add(dx * dx, rotated, omega * Vec<2>(-rotated.y(), rotated.x()), h_over_dx * dx);
+  }
   Box<2> open;
   open.edge = {Edge::open, Edge::open};
-  lattice::Square square{dx};
-  state.counters["new_particles"] = static_cast<double>(
-      time_remaps(state, p0, square, open, regularize::RemapParams{h_over_dx, 0.5, 0.75 / h_over_dx, 1e-6},
-                  region::Annulus{r_in, r_out}));
+  const regularize::RemapParams params{h_over_dx, 0.5, 0.75 / h_over_dx, 1e-6};
+  std::size_t n_after = 0;
+  if constexpr (std::is_same_v<Lattice, lattice::Rings>) {
+    lattice::Rings rings{dx, r_in, r_out};
+    n_after = time_remaps<Order>(state, p0, rings, open, params);
+  } else {
+    lattice::Square square{dx};
+    n_after = time_remaps<Order>(state, p0, square, open, params, region::Annulus{r_in, r_out});
+  }
+  state.counters["new_particles"] = static_cast<double>(n_after);
 }
 
 // The same remap onto a two-level lattice: level-0 spacing 2 Delta, the left half refined to Delta, so the
@@ -249,11 +266,17 @@ int main(int argc, char** argv) {
     for (std::int64_t jitter : {0, 5, 10, 15, 20, 30, 40}) b->Args({100000, jitter, t});
     b->Unit(benchmark::kMillisecond)->UseRealTime();
   }
-  for (int t : {1, 0}) {
-    auto* b = benchmark::RegisterBenchmark(t == 1 ? "remap_disk/1thread" : "remap_disk/allthreads", BM_remap_disk);
-    for (std::int64_t n : {10000, 100000, 1000000}) b->Args({n, 10, t});
-    b->Unit(benchmark::kMillisecond)->UseRealTime()->Complexity(benchmark::oN);
-  }
+  auto disk = [](const std::string& name, auto fn) {
+    for (int t : {1, 0}) {
+      auto* b = benchmark::RegisterBenchmark((name + (t == 1 ? "/1thread" : "/allthreads")).c_str(), fn);
+      for (std::int64_t n : {10000, 100000, 1000000}) b->Args({n, 10, t});
+      b->Unit(benchmark::kMillisecond)->UseRealTime()->Complexity(benchmark::oN);
+    }
+  };
+  disk("remap_disk", BM_remap_disk<lattice::Square>);
+  disk("remap_disk_rings", BM_remap_disk<lattice::Rings>);
+  disk("remap_disk_second", BM_remap_disk<lattice::Square, regularize::SecondOrder>);
+  disk("remap_disk_rings_second", BM_remap_disk<lattice::Rings, regularize::SecondOrder>);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   benchmark::RunSpecifiedBenchmarks();
