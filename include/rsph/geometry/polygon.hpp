@@ -271,16 +271,46 @@ inline void grid_overlaps(const ConvexPolygon& p, const double* xs, int n_i, con
   grid_overlaps(p, xs, n_i, ys, n_j, area.data());
 }
 
-/// p intersected with a convex polygon `window` (counter-clockwise).
-inline ConvexPolygon clip_convex(const ConvexPolygon& p, const ConvexPolygon& window) {
-  ConvexPolygon cur = p, next;
-  for (int i = 0, j = window.n - 1; i < window.n && cur.n >= 3; j = i++) {
+/// Whether a side of the convex polygon `window` (counter-clockwise) has all of p beyond it or within `width`
+/// of it: then whatever p and the window share lies in a strip of that width along the side, inside the
+/// window, so its area is at most width times the window's diameter.
+inline bool apart(const ConvexPolygon& p, const ConvexPolygon& window, double width) {
+  for (int i = 0, j = window.n - 1; i < window.n; j = i++) {
+    const Point e = window[i] - window[j];
+    const Point normal(e.y(), -e.x());  // outward, of length |e|
+    const double inside = normal.dot(window[j]) - width * e.norm();
+    int v = 0;
+    while (v < p.n && normal.dot(p[v]) >= inside) ++v;  // stops at the first vertex well inside this side
+    if (v == p.n) return true;
+  }
+  return false;
+}
+
+/// p intersected with a convex polygon `window` (counter-clockwise) into `out`, `scratch` the other buffer of
+/// the ping-pong: a side of the window that no vertex lies beyond costs its dot products and no copy.
+inline void clip_convex(const ConvexPolygon& p, const ConvexPolygon& window, ConvexPolygon& out,
+                        ConvexPolygon& scratch) {
+  const ConvexPolygon* cur = &p;
+  ConvexPolygon* next = &out;
+  for (int i = 0, j = window.n - 1; i < window.n && cur->n >= 3; j = i++) {
     const Point e = window[i] - window[j];
     const Point normal(e.y(), -e.x());  // outward for a counter-clockwise window
-    clip_halfplane(cur, normal, normal.dot(window[j]), next);
-    cur = next;
+    if (detail::cut_halfplane(*cur, normal, normal.dot(window[j]), *next)) {
+      cur = next;
+      next = next == &out ? &scratch : &out;
+    }
   }
-  return cur;
+  if (cur->n < 3)
+    out.clear();
+  else if (cur != &out)
+    out = *cur;
+}
+
+/// p intersected with a convex polygon `window` (counter-clockwise).
+inline ConvexPolygon clip_convex(const ConvexPolygon& p, const ConvexPolygon& window) {
+  ConvexPolygon out, scratch;
+  clip_convex(p, window, out, scratch);
+  return out;
 }
 
 /// The sides of a convex polygon of at most 32 sides (counter-clockwise) as outward normals and offsets: x is

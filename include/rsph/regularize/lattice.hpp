@@ -34,13 +34,17 @@ concept RegularLattice = requires(const L& l, const Box<D>& box, const Vec<D>& l
 };
 
 /// The new cells of a lattice whose sites each own a cell of their own (2D), placed for one remap: how many,
-/// each site, its cell relative to a point, the area a full cell holds (for the hand-on of nearly empty
-/// cells), the sites next to one, and the candidates whose cells may overlap a polygon.
+/// each site, its cell relative to a point (whether its bounding box meets a box, a bound on its diameter),
+/// the area a full cell holds (for the hand-on of nearly empty cells), the sites next to one, and the
+/// candidates whose cells may overlap a polygon.
 template <class S>
-concept SiteCells = requires(const S& s, std::size_t c, const geometry::ConvexPolygon& polygon, const Vec<2>& x) {
+concept SiteCells = requires(const S& s, std::size_t c, const geometry::ConvexPolygon& polygon, const Vec<2>& x,
+                             const geometry::Bounds& box) {
   { s.n_cells } -> std::convertible_to<std::size_t>;
   { s.site(c) } -> std::same_as<Vec<2>>;
   { s.cell(c, x) } -> std::same_as<geometry::ConvexPolygon>;
+  { s.box_meets(c, x, box) } -> std::same_as<bool>;
+  { s.diameter(c) } -> std::same_as<double>;
   { s.nominal_area(c) } -> std::same_as<double>;
   s.for_each_neighbour(c, [](std::size_t) {});
   s.for_each_candidate(polygon, x, [](std::size_t) {});
@@ -126,8 +130,8 @@ constexpr bool check_lattice() {
         "a regularization lattice needs `cell_volume()`, `cells_touching(box, lo, hi)`, `site(box, index)` "
         "and `periods(box)` (one level), `finest()` (levels in factors of two, lattice::MultiLevel), or "
         "`per_site_cells` and `following(x, m, reach)` giving sites with cells of their own (lattice::Rings), "
-        "whose result has `n_cells`, `site(c)`, `cell(c, origin)`, `nominal_area(c)`, `for_each_neighbour(c, f)` "
-        "and `for_each_candidate(polygon, origin, f)`");
+        "whose result has `n_cells`, `site(c)`, `cell(c, origin)`, `box_meets(c, origin, bounds)`, `diameter(c)`, "
+        "`nominal_area(c)`, `for_each_neighbour(c, f)` and `for_each_candidate(polygon, origin, f)`");
   if constexpr (requires {
                   { L::dim } -> std::convertible_to<int>;
                 })

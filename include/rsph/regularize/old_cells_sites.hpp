@@ -8,8 +8,8 @@
 #include "rsph/geometry/polygon.hpp"
 #include "rsph/geometry/sites.hpp"
 #include "rsph/regularize/cell_grid.hpp"
-#include "rsph/regularize/region.hpp"
 #include "rsph/regularize/lattice.hpp"
+#include "rsph/regularize/region.hpp"
 
 #include <span>
 #include <vector>
@@ -22,11 +22,12 @@ template <SiteCells Sites, class F>
 void for_each_site_piece(const Sites& sites, const geometry::ConvexPolygon& cell, const Vec<2>& xo, double crumb,
                          F&& f) {
   const geometry::Bounds b = geometry::bounds(cell);
+  geometry::ConvexPolygon piece, scratch;
   sites.for_each_candidate(cell, xo, [&](std::size_t c) {
+    if (!sites.box_meets(c, xo, b)) return;
     const geometry::ConvexPolygon window = sites.cell(c, xo);
-    const geometry::Bounds w = geometry::bounds(window);
-    if (w.lo.x() >= b.hi.x() || w.hi.x() <= b.lo.x() || w.lo.y() >= b.hi.y() || w.hi.y() <= b.lo.y()) return;
-    const geometry::ConvexPolygon piece = geometry::clip_convex(cell, window);
+    if (geometry::apart(cell, window, crumb / sites.diameter(c))) return;  // shares less than a crumb
+    geometry::clip_convex(cell, window, piece, scratch);
     if (piece.n >= 3 && geometry::area(piece) > crumb) f(c, piece);
   });
 }

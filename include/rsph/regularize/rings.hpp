@@ -27,11 +27,13 @@ namespace rsph::lattice {
 /// Sites are numbered ring by ring from the innermost, each ring counter-clockwise.
 struct RingSites {
   double spacing = 0.0;
-  std::int64_t first_ring = 0;          ///< the lattice's index of the innermost ring here
-  std::vector<double> radius, phase;    ///< per ring: r_i, and the angle site 0 lies half a step past
-  std::vector<std::size_t> offset{0};   ///< per ring and one past the last: its first site's number
-  std::vector<std::size_t> cell_start;  ///< per site and one past the last: its first vertex
-  std::vector<Vec<2>> vertices;         ///< every cell's vertices, relative to its site, counter-clockwise
+  std::int64_t first_ring = 0;           ///< the lattice's index of the innermost ring here
+  std::vector<double> radius, phase;     ///< per ring: r_i, and the angle site 0 lies half a step past
+  std::vector<std::size_t> offset{0};    ///< per ring and one past the last: its first site's number
+  std::vector<Vec<2>> xy;                ///< every site (place() sets them from the phases)
+  std::vector<std::size_t> cell_start;   ///< per site and one past the last: its first vertex
+  std::vector<Vec<2>> vertices;          ///< every cell's vertices, relative to its site, counter-clockwise
+  std::vector<geometry::Bounds> bounds;  ///< every cell's bounding box, relative to its site
   /// Per ring: the least and largest distance of its cells from the origin, and the most any cell reaches
   /// in angle (seen from the origin) from its site's angle; pi where a cell holds the origin.
   std::vector<double> reach_lo, reach_hi, reach_angle;
@@ -44,10 +46,15 @@ struct RingSites {
   std::size_t ring_of(std::size_t c) const {
     return static_cast<std::size_t>(std::upper_bound(offset.begin(), offset.end(), c) - offset.begin()) - 1;
   }
-  Vec<2> site(std::size_t c) const {
-    const std::size_t k = ring_of(c);
-    const double a = angle(k, static_cast<std::int64_t>(c - offset[k]));
-    return radius[k] * Vec<2>(std::cos(a), std::sin(a));
+  Vec<2> site(std::size_t c) const { return xy[c]; }
+  /// Sets every site from its ring's radius and phase.
+  void place() {
+    xy.resize(n_cells);
+    for (std::size_t k = 0; k < rings(); ++k)
+      for (std::size_t c = offset[k]; c < offset[k + 1]; ++c) {
+        const double a = angle(k, static_cast<std::int64_t>(c - offset[k]));
+        xy[c] = radius[k] * Vec<2>(std::cos(a), std::sin(a));
+      }
   }
   /// The site of ring k nearest in angle to phi (wrapped into the ring).
   std::int64_t nearest(std::size_t k, double phi) const {
@@ -61,6 +68,14 @@ struct RingSites {
     const std::size_t k = ring_of(c);
     return step(k) * radius[k] * spacing;
   }
+  /// Whether cell c's bounding box meets the box b (both relative to `origin`).
+  bool box_meets(std::size_t c, const Vec<2>& origin, const geometry::Bounds& b) const {
+    const Vec<2> shift = xy[c] - origin;
+    return bounds[c].lo.x() + shift.x() < b.hi.x() && bounds[c].hi.x() + shift.x() > b.lo.x() &&
+           bounds[c].lo.y() + shift.y() < b.hi.y() && bounds[c].hi.y() + shift.y() > b.lo.y();
+  }
+  /// At least cell c's diameter: its bounding box's diagonal.
+  double diameter(std::size_t c) const { return (bounds[c].hi - bounds[c].lo).norm(); }
   /// Cell c relative to `origin`.
   geometry::ConvexPolygon cell(std::size_t c, const Vec<2>& origin) const {
     geometry::ConvexPolygon out;
@@ -100,8 +115,9 @@ struct PolarExtent {
 inline PolarExtent polar_extent(const geometry::ConvexPolygon& p, const Vec<2>& xo, const Vec<2>& towards) {
   PolarExtent e;
   e.r_lo = std::numeric_limits<double>::max();
-  bool inside = p.n >= 3;
+  bool inside = p.n >= 3, ahead = true;
   const double scale = towards.norm();
+  double t_lo = 0.0, t_hi = 0.0;  // tangents of the angles while every vertex lies ahead (dot > 0)
   for (int i = 0, j = p.n - 1; i < p.n; j = i++) {
     const Vec<2> a = p[j] + xo, b = p[i] + xo, ab = b - a;
     inside &= ab.x() * (-a.y()) - ab.y() * (-a.x()) > 0.0;  // the origin left of every edge
@@ -110,10 +126,22 @@ inline PolarExtent polar_extent(const geometry::ConvexPolygon& p, const Vec<2>& 
     const double r = b.norm();
     e.r_hi = std::max(e.r_hi, r);
     if (r <= 1e-12 * scale) continue;  // a vertex on the origin has no angle (a wedge's tip)
-    const double ang = std::atan2(towards.x() * b.y() - towards.y() * b.x(), towards.dot(b));
-    e.angle_lo = std::min(e.angle_lo, ang);
-    e.angle_hi = std::max(e.angle_hi, ang);
+    const double cross = towards.x() * b.y() - towards.y() * b.x(), dot = towards.dot(b);
+    if (dot > 0.0) {
+      t_lo = std::min(t_lo, cross / dot);
+      t_hi = std::max(t_hi, cross / dot);
+    } else {
+      ahead = false;
+    }
+    if (!ahead) {  // beyond a right angle somewhere: angles one by one
+      const double ang = std::atan2(cross, dot);
+      e.angle_lo = std::min(e.angle_lo, ang);
+      e.angle_hi = std::max(e.angle_hi, ang);
+    }
   }
+  // the angle grows with its tangent below a right angle: two arctangents for the whole polygon
+  e.angle_lo = std::min(e.angle_lo, std::atan(t_lo));
+  e.angle_hi = std::max(e.angle_hi, std::atan(t_hi));
   if (inside) {
     e.r_lo = 0.0;
     e.angle_lo = -std::numbers::pi;
@@ -123,47 +151,78 @@ inline PolarExtent polar_extent(const geometry::ConvexPolygon& p, const Vec<2>& 
 }
 }  // namespace detail
 
-/// Builds each cell by clipping a square of half-width 3 Delta (`edge_extent` on the innermost and outermost
-/// rings, whose cells take in everything beyond them) with the bisectors of the sites within two rings and
-/// three sites; an inner cell that reaches more than 1.2 Delta from its site could be cut by a site further
-/// away, and is refused.
+namespace detail {
+/// Site c's Voronoi cell among the sites within `rings` rings and `reach` sites along each (relative to the
+/// site), clipped from a square of half-width `half`: the sites on its own ring first, then the rings beside
+/// from the nearest site outwards, so that the cell takes its shape from the first few and the rest mostly
+/// cut nothing (a side that cuts nothing costs no copy).
+inline geometry::ConvexPolygon voronoi_cell(const RingSites& s, std::size_t c, std::size_t k, double half,
+                                            std::size_t rings, std::int64_t reach) {
+  geometry::ConvexPolygon cell = geometry::ConvexPolygon::rectangle(-half, -half, half, half);
+  const Vec<2> x = s.site(c);
+  const double phi = s.angle(k, static_cast<std::int64_t>(c - s.offset[k]));
+  auto cut_by = [&](std::size_t m, std::int64_t d) {
+    const auto nm = s.sites_on(m);
+    const std::size_t b = s.offset[m] + static_cast<std::size_t>(((s.nearest(m, phi) + d) % nm + nm) % nm);
+    if (b == c) return;
+    const Vec<2> dx = s.site(b) - x;
+    geometry::clip_halfplane(cell, dx, 0.5 * dx.squaredNorm());
+  };
+  for (std::int64_t d = 0; d <= reach; ++d)
+    for (std::size_t dm = 0; dm <= rings; ++dm)
+      for (const int side : {-1, 1}) {
+        if (dm == 0 && side == 1) continue;  // the own ring once
+        if (dm > k && side == -1) continue;
+        const std::size_t m = side < 0 ? k - dm : k + dm;
+        if (m >= s.rings()) continue;
+        cut_by(m, d);
+        if (d > 0) cut_by(m, -d);
+      }
+  return cell;
+}
+}  // namespace detail
+
+/// Builds each cell by clipping a square of half-width 1.5 Delta (`edge_extent` on the innermost and outermost
+/// rings, whose cells take in everything beyond them) with the bisectors of its two neighbours on its ring and
+/// the three nearest on each ring beside. Any other site lies at least 1.8 Delta off (two along its own ring:
+/// 2 Delta; two along a ring beside: 1.5 steps along and Delta across; two rings away: 2 Delta), so it cannot
+/// cut a cell that reaches less than 0.9 Delta; a cell reaching further is built again among two rings and
+/// three sites each way, and refused if it still reaches beyond 1.2 Delta.
 inline void RingSites::build_cells(double edge_extent) {
-  cell_start.assign(n_cells + 1, 0);
-  std::vector<geometry::ConvexPolygon> built(n_cells);  // parallel first, then packed
   const std::size_t n_rings = rings();
-  run_parallel(n_cells, [&](int, std::size_t begin, std::size_t end) {
+  const auto n_threads = static_cast<std::size_t>(max_threads());
+  std::vector<std::vector<Vec<2>>> verts(n_threads);  // per thread, its contiguous run of cells in order
+  cell_start.assign(n_cells + 1, 0);
+  bounds.resize(n_cells);
+  run_parallel(n_cells, [&](int t, std::size_t begin, std::size_t end) {
+    auto& own = verts[static_cast<std::size_t>(t)];
+    own.clear();
     for (std::size_t c = begin; c < end; ++c) {
       const std::size_t k = ring_of(c);
       const bool edge = k == 0 || k + 1 == n_rings;
-      const double half = edge ? std::max(edge_extent, 3.0 * spacing) : 3.0 * spacing;
-      geometry::ConvexPolygon cell = geometry::ConvexPolygon::rectangle(-half, -half, half, half);
-      const Vec<2> x = site(c);
-      const double phi = angle(k, static_cast<std::int64_t>(c - offset[k]));
-      for (std::size_t m = k >= 2 ? k - 2 : 0; m <= std::min(k + 2, n_rings - 1); ++m) {
-        const auto near = nearest(m, phi), nm = sites_on(m);
-        for (std::int64_t d = -3; d <= 3; ++d) {
-          const std::size_t b = offset[m] + static_cast<std::size_t>(((near + d) % nm + nm) % nm);
-          if (b == c) continue;
-          const Vec<2> dx = site(b) - x;
-          geometry::clip_halfplane(cell, dx, 0.5 * dx.squaredNorm());
-        }
+      const double half = edge ? std::max(edge_extent, 3.0 * spacing) : 1.5 * spacing;
+      geometry::ConvexPolygon cell = detail::voronoi_cell(*this, c, k, half, 1, 1);
+      if (!edge && geometry::max_radius(cell, Vec<2>::Zero()) >= 0.89 * spacing) {
+        cell = detail::voronoi_cell(*this, c, k, 3.0 * spacing, 2, 3);
+        if (geometry::max_radius(cell, Vec<2>::Zero()) > 1.2 * spacing)
+          throw NumericalError("rings lattice: the cell of site " + std::to_string(c) + " on the ring at r = " +
+                               std::to_string(radius[k]) + " reaches beyond 1.2 Delta; too few sites on the ring?");
       }
-      if (!edge && geometry::max_radius(cell, Vec<2>::Zero()) > 1.2 * spacing)
-        throw NumericalError("rings lattice: the cell of site " + std::to_string(c) + " on the ring at r = " +
-                             std::to_string(radius[k]) + " reaches beyond 1.2 Delta; too few sites on the ring?");
-      built[c] = cell;
+      cell_start[c + 1] = static_cast<std::size_t>(cell.n);
+      bounds[c] = geometry::bounds(cell);
+      for (int v = 0; v < cell.n; ++v) own.push_back(cell[v]);
     }
   });
-  for (std::size_t c = 0; c < n_cells; ++c) cell_start[c + 1] = cell_start[c] + static_cast<std::size_t>(built[c].n);
-  vertices.resize(cell_start[n_cells]);
+  for (std::size_t c = 0; c < n_cells; ++c) cell_start[c + 1] += cell_start[c];
+  vertices.clear();
+  vertices.reserve(cell_start[n_cells]);
+  for (const auto& own : verts) vertices.insert(vertices.end(), own.begin(), own.end());
   reach_lo.assign(n_rings, std::numeric_limits<double>::max());
   reach_hi.assign(n_rings, 0.0);
   reach_angle.assign(n_rings, 0.0);
   for (std::size_t c = 0; c < n_cells; ++c) {
-    for (int v = 0; v < built[c].n; ++v) vertices[cell_start[c] + static_cast<std::size_t>(v)] = built[c][v];
     const std::size_t k = ring_of(c);
-    const Vec<2> x = site(c);
-    const auto e = detail::polar_extent(built[c], x, x);
+    const auto e = detail::polar_extent(cell(c, Vec<2>::Zero()), Vec<2>::Zero(), xy[c]);
     reach_lo[k] = std::min(reach_lo[k], e.r_lo);
     reach_hi[k] = std::max(reach_hi[k], e.r_hi);
     reach_angle[k] = std::max({reach_angle[k], -e.angle_lo, e.angle_hi});
@@ -242,6 +301,7 @@ struct Rings {
       s.offset.push_back(s.offset.back() + static_cast<std::size_t>(sites_on(i)));
     }
     s.n_cells = s.offset.back();
+    s.place();
     return s;
   }
   /// The sites gas at x (masses m) is remapped onto: the rings whose bands hold gas, from the innermost to the
@@ -268,6 +328,7 @@ struct Rings {
     for (std::size_t k = 0; k < s.rings(); ++k)
       if (std::abs(sum[k]) > 0.0)
         s.phase[k] = (std::arg(sum[k]) - std::numbers::pi) / static_cast<double>(s.sites_on(k));
+    s.place();
     const double beyond = std::max(0.0, s.radius.front() - g_lo) + std::max(0.0, g_hi - s.radius.back());
     s.build_cells(beyond + reach + 3.0 * spacing);
     return s;
