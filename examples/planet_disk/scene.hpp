@@ -88,7 +88,8 @@ struct PlanetDiskParams {
   /// Pressure support: v_phi^2 = v_K^2 (1 - aspect^2 / Gamma) for Sigma uniform and P ~ Sigma / r, with
   /// Gamma = 1 for the isothermal and gamma for the polytropic disk (whose P starts at c_s^2 Sigma / gamma).
   double v_factor() const { return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0)); }
-  paper::KeplerianZones zones() const { return {1.0, r_in + zone(), r_out - zone(), v_factor()}; }
+  /// On the rings lattice the zones keep their members through the remaps (KeplerianZones::members_kept).
+  paper::KeplerianZones zones() const { return {1.0, r_in + zone(), r_out - zone(), v_factor(), lattice == "rings"}; }
   Box<2> box() const {
     Box<2> b;
     b.lo = Vec<2>(-r_out - 1.0, -r_out - 1.0);

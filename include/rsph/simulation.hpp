@@ -151,10 +151,14 @@ class Simulation {
   void regularize_now() {
     const auto t0 = clock::now();
     p_.clear_ghosts();
+    // members of zones that keep them sit the remap out, identities and all
+    const bool keep = boundary::any_zone_keeps_members(terms_);
+    auto kept = keep ? p_.take_if([&](std::size_t a) { return p_.frozen[a] != 0; }) : Particles{};
     kinetic_removed_ += reg_.remap(p_, box_, step_info());
-    p_.renumber();                         // every particle is new
+    p_.renumber();  // every particle is new
+    if (keep) p_.append(kept);
     if constexpr (corrected) cg_.reset();  // new particles: solve afresh
-    boundary::mark_zone_members<D>(terms_, p_);
+    boundary::mark_zone_members<D>(terms_, p_, true);
     ++regularizations_;
     since_ = {};
     times_.regularization += seconds_since(t0);

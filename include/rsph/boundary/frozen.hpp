@@ -42,12 +42,28 @@ void prescribe_frozen(const std::tuple<Terms...>& terms, ParticleSet<D, E>& p, d
   std::apply([&](const auto&... term) { (apply_motion(term), ...); }, terms);
 }
 
-/// Flags the particles inside a boundary zone as frozen (other flags stay); their velocity is the zone's.
+/// Whether a boundary zone keeps its members through a regularization (`members_kept`): they are left out of
+/// the remap and keep their identity, and the new particles are not made members, however near they land.
+/// Otherwise (the paper's zones) membership is decided anew by position after every regularization.
+template <class T>
+bool keeps_members(const T& t) {
+  if constexpr (requires { t.members_kept; })
+    return t.members_kept;
+  else
+    return false;
+}
+template <class... Terms>
+bool any_zone_keeps_members(const std::tuple<Terms...>& terms) {
+  return std::apply([](const auto&... t) { return (keeps_members(t) || ... || false); }, terms);
+}
+
+/// Flags the particles inside a boundary zone as frozen (other flags stay); their velocity is the zone's. After
+/// a regularization (`after_remap`), zones that keep their members flag none.
 template <int D, bool E, class... Terms>
-void mark_zone_members(const std::tuple<Terms...>& terms, ParticleSet<D, E>& p) {
+void mark_zone_members(const std::tuple<Terms...>& terms, ParticleSet<D, E>& p, bool after_remap = false) {
   auto mark = [&](const auto& t) {
     if constexpr (BoundaryZone<std::decay_t<decltype(t)>, D>)
-      for (std::size_t a = 0; a < p.n_real; ++a)
+      for (std::size_t a = 0; a < p.n_real && !(after_remap && keeps_members(t)); ++a)
         if (t.contains(p.x[a])) {
           p.frozen[a] = 1;
           Vec<D> x = p.x[a];

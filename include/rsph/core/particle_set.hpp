@@ -111,6 +111,25 @@ struct ParticleSet {
     ghost_source.clear();
   }
 
+  /// Appends real particle a of q, every field and its identity (while there are no ghosts).
+  void append_from(const ParticleSet& q, std::size_t a) {
+    m.push_back(q.m[a]);
+    x.push_back(q.x[a]);
+    v.push_back(q.v[a]);
+    h.push_back(q.h[a]);
+    rho.push_back(q.rho[a]);
+    P.push_back(q.P[a]);
+    cs.push_back(q.cs[a]);
+    dv_dt.push_back(q.dv_dt[a]);
+    if constexpr (HasEnergy) {
+      u.push_back(q.u[a]);
+      du_dt.push_back(q.du_dt[a]);
+    }
+    frozen.push_back(q.frozen[a]);
+    id.push_back(q.id[a]);
+    n_real = x.size();
+  }
+
   /// Appends a ghost copy of particle `source` (itself possibly a ghost) at `pos` with velocity `vel`.
   void add_ghost(std::size_t source, const Vec<D>& pos, const Vec<D>& vel) {
     const std::size_t real = source < n_real ? source : ghost_source[source - n_real];
@@ -187,6 +206,24 @@ struct ParticleSet {
     resize_all(kept);
     n_real = kept;
     return removed;
+  }
+
+  /// Moves the real particles for which take(a) holds, every field and identity with them, into a set of their
+  /// own; the rest stay, in order. Ghosts are dropped.
+  template <class Predicate>
+  ParticleSet take_if(Predicate&& take) {
+    clear_ghosts();
+    ParticleSet out;
+    for (std::size_t a = 0; a < n_real; ++a)
+      if (take(a)) out.append_from(*this, a);
+    out.next_id = next_id;
+    erase_if(take);
+    return out;
+  }
+  /// Appends q's real particles, every field and identity kept (no ghosts on either side).
+  void append(const ParticleSet& q) {
+    clear_ghosts();
+    for (std::size_t a = 0; a < q.n_real; ++a) append_from(q, a);
   }
 
   void reserve(std::size_t n) {

@@ -17,6 +17,11 @@ struct KeplerianZones {
   double outer = 2.4;  ///< gas at r >= outer is in the outer zone
   /// v_phi = v_factor sqrt(GM / r): 1 for Keplerian orbits, below 1 where pressure supports the gas.
   double v_factor = 1.0;
+  /// Whether the members chosen at the start keep their membership and identity through every regularization
+  /// (left out of the remap) instead of membership being decided anew by radius (the paper's zones). A lattice
+  /// that follows the orbits no longer mixes gas across the zone's edge, so gas that strayed inside at a remap
+  /// would be held there for good: the zone would fill up.
+  bool members_kept = false;
 
   void validate() const {
     require(GM > 0.0, "Keplerian zones: GM must be positive");
