@@ -96,6 +96,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
        "remap): the start and RSPH's regularization lattice (the same particle count)");
   flag("orbits", s.orbits, "planet orbits to run");
   flag("zone-width", s.zone_width, "width of the boundary zones on fixed orbits at both edges");
+  flag("keep-zone-members", s.keep_zone_members,
+       "the zones keep the members chosen at the start through every remap, instead of deciding membership by "
+       "radius after each (the paper's)");
   flag("courant", s.courant, "time-step Courant factor");
   flag("force", s.force, "time-step force factor");
   flag("max-bin", s.max_bin,

@@ -31,6 +31,9 @@ struct PlanetDiskParams {
   double orbits = 100.0;           ///< planet orbits to run
   double r_in = 0.4, r_out = 2.5;  ///< the disk
   double zone_width = 0.1;         ///< width of the boundary zones on fixed orbits
+  /// Whether the zones keep the members chosen at the start through every remap (KeplerianZones::members_kept)
+  /// instead of deciding membership by radius after each (the paper's zones)
+  bool keep_zone_members = false;
   double sigma0 = 0.002 / std::numbers::pi;  ///< eq. (19)'s value 6.366e-4 (de Val-Borro's 0.002 / pi), M_* / a^2
   double aspect = 0.05;                      ///< c_s / v_K
   double gamma = 1.4;                        ///< polytropic exponent (eq. 21)
@@ -88,8 +91,7 @@ struct PlanetDiskParams {
   /// Pressure support: v_phi^2 = v_K^2 (1 - aspect^2 / Gamma) for Sigma uniform and P ~ Sigma / r, with
   /// Gamma = 1 for the isothermal and gamma for the polytropic disk (whose P starts at c_s^2 Sigma / gamma).
   double v_factor() const { return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0)); }
-  /// On the rings lattice the zones keep their members through the remaps (KeplerianZones::members_kept).
-  paper::KeplerianZones zones() const { return {1.0, r_in + zone(), r_out - zone(), v_factor(), lattice == "rings"}; }
+  paper::KeplerianZones zones() const { return {1.0, r_in + zone(), r_out - zone(), v_factor(), keep_zone_members}; }
   Box<2> box() const {
     Box<2> b;
     b.lo = Vec<2>(-r_out - 1.0, -r_out - 1.0);

@@ -171,13 +171,14 @@ TEST_CASE("planet disk, reduced, on a hexagonal lattice: mass kept and the gap o
   CHECK(mean_depth(11) < mean_depth(5) - 0.02);
 }
 
-TEST_CASE("planet disk on the rings lattice: the boundary zones keep their members through every remap",
+TEST_CASE("planet disk on the rings lattice: zones asked to keep their members keep them through every remap",
           "[examples][disk]") {
-  // The rings no longer mix gas across a zone's edge: were membership decided anew by radius, gas that strayed
-  // inside at a remap would be held on fixed orbits for good.
+  // The rings no longer mix gas across a zone's edge: with membership decided anew by radius, gas that strays
+  // inside at a remap is held on fixed orbits for good (--keep-zone-members).
   scenes::PlanetDiskParams s;
   s.particles = 4000;
   s.lattice = "rings";
+  s.keep_zone_members = true;
   const lattice::Rings lat{s.spacing(), s.r_in, s.r_out};
   auto sim = scenes::make_rsph_disk(s, lat, eos::LocallyIsothermal<scenes::DiskSoundSpeed>({s.aspect, 1.0}));
   auto members = [&] {
