@@ -9,6 +9,7 @@ FARGO3D's own resolutions as points on the same chart.
   compare_lattices.py --out out/lattices --ring-paper             # the ring at h = 0.02 (hours per run)
   compare_lattices.py --out out/lattices --only disk --disk-resolutions low,med,high
   compare_lattices.py --out out/lattices --only drift             # the disk without a planet (--q 0)
+  compare_lattices.py --out out/lattices --only neptune           # Neptune (--q 1e-4), gap depth and profile
 """
 import argparse
 import concurrent.futures as cf
@@ -46,7 +47,12 @@ def drift_runs(a):
             for r in a.disk_resolutions.split(",")]
 
 
-TESTS = {"ring": ring_runs, "disk": disk_runs, "drift": drift_runs}
+def neptune_runs(a):
+    return [("neptune", r, "rsph-planet-disk", ["--resolution", r, "--q", 1e-4, "--snapshot-every", 100])
+            for r in a.disk_resolutions.split(",")]
+
+
+TESTS = {"ring": ring_runs, "disk": disk_runs, "drift": drift_runs, "neptune": neptune_runs}
 
 
 def run_all(a):
@@ -88,7 +94,7 @@ def drift_error(r):
 
 def table(results):
     lines = []
-    for test in ("ring", "disk", "drift"):
+    for test in ("ring", "disk", "drift", "neptune"):
         rows = sorted((r for r in results if r["test"] == test), key=lambda r: (r["setting"], r["lattice"], r["order"]))
         if not rows:
             continue
@@ -111,6 +117,15 @@ def table(results):
                 lines.append(f"| {r['setting']} | {r['lattice']} | {r['order']} | {s['particles_initial']} | " +
                              " | ".join(f"{v:.3f}" for v in disk_l1(r)) +
                              f" | {s['gap_depth']:.3f} | {s['cpu_seconds']:.0f} |")
+        elif test == "neptune":
+            lines += ["| resolution | lattice | remap | gap depth | Sigma/Sigma_0 at r = 0.9 / 1.1 | CPU s |",
+                      "|---" * 6 + "|"]
+            for r in rows:
+                prof = read_csv(os.path.join(r["out"], "profile.csv"))
+                at = {round(x, 2): v for x, v in zip(prof["r"], prof["sigma_over_sigma0"])}
+                lines.append(f"| {r['setting']} | {r['lattice']} | {r['order']} | {r['s']['gap_depth']:.3f} | "
+                             f"{at.get(0.91, float('nan')):.3f} / {at.get(1.09, float('nan')):.3f} | "
+                             f"{r['s']['cpu_seconds']:.0f} |")
         else:
             lines += ["| resolution | lattice | remap | max abs(Sigma/Sigma_0 - 1), 0.6 < r < 2.3 | CPU s |",
                       "|---" * 5 + "|"]
@@ -129,7 +144,8 @@ def draw(results, png):
                  "drift": drift_error}[test]
         for lat in LATTICES:
             for order in ORDERS:
-                rs = sorted((r for r in results if r["test"] == test and r["lattice"] == lat and r["order"] == order),
+                rs = sorted((r for r in results if r["test"] == test and r["lattice"] == lat and r["order"] == order
+                             and (test != "ring" or r["setting"].startswith("hdx1.4"))),
                             key=lambda r: r["s"]["cpu_seconds"])
                 if rs:
                     ax.plot([r["s"]["cpu_seconds"] for r in rs], [max(error(r), 1e-5) for r in rs],
@@ -142,7 +158,7 @@ def draw(results, png):
         ax.set_xlabel("CPU seconds (one thread)")
         ax.set_ylabel({"ring": "|nu_eff / nu_s - 1|", "disk": "L1 against FARGO3D 768x256, 0.6 < r < 2",
                        "drift": "max |Sigma/Sigma_0 - 1|, q = 0"}[test])
-        ax.set_title({"ring": "viscous ring", "disk": "planet disk, 100 orbits",
+        ax.set_title({"ring": "viscous ring, h/Delta = 1.4, c_r = 1-8", "disk": "planet disk, 100 orbits",
                       "drift": "disk without a planet, 100 orbits"}[test])
         ax.legend(fontsize=7)
     save_figure(fig, png)
