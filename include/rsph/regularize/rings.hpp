@@ -149,9 +149,7 @@ inline PolarExtent polar_extent(const geometry::ConvexPolygon& p, const Vec<2>& 
   }
   return e;
 }
-}  // namespace detail
 
-namespace detail {
 /// Site c's Voronoi cell among the sites within `rings` rings and `reach` sites along each (relative to the
 /// site), clipped from a square of half-width `half`: the sites on its own ring first, then the rings beside
 /// from the nearest site outwards, so that the cell takes its shape from the first few and the rest mostly
