@@ -64,6 +64,14 @@ struct CellGrid {
   }
 };
 
+/// The largest smoothing length of the real particles: old cells reach at most the closing radius in h of it.
+template <int D, bool E>
+double max_smoothing_length(const ParticleSet<D, E>& p) {
+  double max_h = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) max_h = std::max(max_h, p.h[a]);
+  return max_h;
+}
+
 /// The candidate cells: the whole box on closed axes, the particles' extent plus the closing radius on
 /// open ones, there rounded out to whole multiples of `align` cells (counted from box.lo). Only an index
 /// range: a remap sums into it densely or, where it holds many cells per particle, sparsely (sums.hpp).
@@ -74,8 +82,7 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
   g.periods = lattice.periods(box);
   const std::size_t n_old = p.n_real;
   Vec<D> lo, hi;
-  double max_h = 0.0;
-  for (std::size_t a = 0; a < n_old; ++a) max_h = std::max(max_h, p.h[a]);
+  const double max_h = max_smoothing_length(p);
   for (int k = 0; k < D; ++k) {
     if (box.edge[k] == Edge::open) {
       lo[k] = std::numeric_limits<double>::max();

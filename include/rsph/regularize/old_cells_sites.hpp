@@ -81,10 +81,8 @@ template <class Lattice, bool E>
 auto site_cells(const ParticleSet<2, E>& p, const Box<2>& box, const Lattice& lattice, const RemapParams& params) {
   require(box.edge[0] == Edge::open && box.edge[1] == Edge::open,
           "regularization: a lattice of per-site cells (rings) needs a box open on both axes");
-  double max_h = 0.0;
-  for (std::size_t a = 0; a < p.n_real; ++a) max_h = std::max(max_h, p.h[a]);
   return lattice.following(std::span<const Vec<2>>(p.x.data(), p.n_real), std::span<const double>(p.m.data(), p.n_real),
-                           params.closing_radius_in_h * max_h * 1.1);
+                           params.closing_radius_in_h * max_smoothing_length(p) * 1.1);
 }
 
 }  // namespace rsph::regularize::detail
