@@ -83,6 +83,22 @@ TEST_CASE("Wendland C2: normalised, compact, exact gradient in 1-3D", "[kernel]"
   check_kernel_in_dimension<kernel::WendlandC2_1D, 1>();
 }
 
+TEST_CASE("Wendland C4 and C6: normalised, compact, exact gradient in 1-3D", "[kernel]") {
+  check_kernel_in_dimension<kernel::WendlandC4, 1>();
+  check_kernel_in_dimension<kernel::WendlandC4, 2>();
+  check_kernel_in_dimension<kernel::WendlandC4, 3>();
+  check_kernel_in_dimension<kernel::WendlandC6, 1>();
+  check_kernel_in_dimension<kernel::WendlandC6, 2>();
+  check_kernel_in_dimension<kernel::WendlandC6, 3>();
+  // the shapes against Dehnen & Aly's Table 1, written for the support H = 2h (x = r / H = q / 2)
+  for (double x = 0.0; x < 1.0; x += 0.05) {
+    CHECK(kernel::WendlandC4::f(2 * x) ==
+          Approx(std::pow(1 - x, 6) * (1 + 6 * x + 35.0 / 3.0 * x * x)).epsilon(1e-14).margin(1e-300));
+    CHECK(kernel::WendlandC6::f(2 * x) ==
+          Approx(std::pow(1 - x, 8) * (1 + 8 * x + 25 * x * x + 32 * x * x * x)).epsilon(1e-14).margin(1e-300));
+  }
+}
+
 TEST_CASE("lattice sum: the SPH density bias of a uniform lattice", "[kernel]") {
   // A wide kernel on a fine lattice recovers the integral; h/dx = 1.2 with the cubic spline is 0.18 % off in 1D.
   CHECK(kernel::lattice_sum<kernel::QuinticSpline, 2>(3.0) == Approx(1.0).margin(1e-6));
