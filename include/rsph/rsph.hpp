@@ -6,6 +6,7 @@
 #include "rsph/analysis/interface.hpp"
 #include "rsph/analysis/interpolate.hpp"
 #include "rsph/analysis/riemann.hpp"
+#include "rsph/analysis/sedov.hpp"
 #include "rsph/analysis/shock_tube.hpp"
 #include "rsph/boundary/frozen.hpp"
 #include "rsph/boundary/ghosts.hpp"
