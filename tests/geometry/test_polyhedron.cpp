@@ -138,6 +138,41 @@ TEST_CASE("polyhedron: degenerate splits (a face in the plane, a plane through a
   CHECK(closed_surface(a2));
 }
 
+TEST_CASE("polyhedron: a face that rounding leaves a hair's breadth either side of the plane splits closed",
+          "[geometry][3d]") {
+  // the unit cube with the corners of its face x = 1 alternately 1e-15 beyond and short of the plane, as a
+  // Voronoi face lying on a lattice plane comes out of rounding: the plane crosses that face four times
+  const double e = 1e-15;
+  ConvexPolyhedron cube;
+  for (int i = 0; i < 8; ++i) {
+    double x = (i & 1) ? 1.0 : 0.0;
+    if (i == 1 || i == 7) x += e;
+    if (i == 3 || i == 5) x -= e;
+    cube.add_vertex(Point3(x, (i & 2) ? 1.0 : 0.0, (i & 4) ? 1.0 : 0.0));
+  }
+  static constexpr std::uint16_t faces[6][4] = {{0, 4, 6, 2}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                                {2, 6, 7, 3}, {0, 2, 3, 1}, {4, 5, 7, 6}};
+  for (const auto& f : faces) {
+    cube.open_face();
+    for (std::uint16_t i : f) cube.add_corner(i);
+    cube.close_face();
+  }
+  REQUIRE(closed_surface(cube));
+  ConvexPolyhedron below, above;
+  REQUIRE(split(cube, AxisPlane{0, 1.0}, &below, &above) == Side::both);
+  CHECK(closed_surface(below));
+  CHECK(closed_surface(above));
+  CHECK(volume(below) + volume(above) == Approx(volume(cube)).epsilon(1e-15));
+  CHECK(std::abs(volume(above)) < 1e-15);
+  // and the grid split of the remap goes through it
+  GridPieceScratch scratch;
+  const double planes[] = {-1.0, 1.0, 2.0}, others[] = {-1.0, 2.0};
+  double total = 0.0;
+  for_each_grid_piece(cube, {planes, others, others}, {2, 1, 1}, scratch,
+                      [&](std::array<int, 3>, const ConvexPolyhedron& piece) { total += volume(piece); });
+  CHECK(total == Approx(volume(cube)).epsilon(1e-15));
+}
+
 TEST_CASE("polyhedron: grid pieces tile the cell, a lattice node splits a cube into eight", "[geometry][3d]") {
   GridPieceScratch scratch;
   {

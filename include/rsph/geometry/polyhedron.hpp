@@ -194,17 +194,22 @@ inline void copy_face(const ConvexPolyhedron& in, int f, const std::uint16_t* at
 }
 
 /// Face f of `in`, which the plane crosses: its corners on each side, a crossing's vertex wherever the side
-/// changes. Going up at X and down at Y, the piece below holds the edge X -> Y and the piece above Y -> X, so
-/// their caps, which run the other way, continue with Y -> X below and X -> Y above.
+/// changes. The piece below holds the edge from each rise X to the next fall Y, X -> Y, and the piece above the
+/// edge from each fall Y to the next rise X, Y -> X, so their caps, which run the other way, continue with Y -> X
+/// below and X -> Y above. A face crossed twice pairs the same two crossings both ways; a face that rounding
+/// has made cross four times or more (one lying in the plane, its corners a rounding either side) pairs them
+/// differently below and above.
 template <class P>
 void split_face(const ConvexPolyhedron& in, int f, const double* s, const std::uint8_t* up, const std::uint16_t* at,
                 const P& plane, Crossings& x, ConvexPolyhedron* below, ConvexPolyhedron* above) {
   const int begin = in.face_start[static_cast<std::size_t>(f)], end = in.face_start[static_cast<std::size_t>(f) + 1];
   if (below) below->open_face(in.label[static_cast<std::size_t>(f)]);
   if (above) above->open_face(in.label[static_cast<std::size_t>(f)]);
-  int pending_up = -1, first_down = -1;
-  auto link = [&](int rise, int fall) {
+  int pending_up = -1, first_down = -1, pending_down = -1, first_up = -1;
+  auto link_below = [&](int rise, int fall) {  // the edge rise -> fall below: its cap continues fall -> rise
     x.next_below[static_cast<std::size_t>(fall)] = static_cast<std::int16_t>(rise);
+  };
+  auto link_above = [&](int fall, int rise) {  // the edge fall -> rise above: its cap continues rise -> fall
     x.next_above[static_cast<std::size_t>(rise)] = static_cast<std::int16_t>(fall);
   };
   int j = in.corner[static_cast<std::size_t>(end - 1)];
@@ -217,19 +222,27 @@ void split_face(const ConvexPolyhedron& in, int f, const double* s, const std::u
       if (below) below->add_corner(x.in_below[static_cast<std::size_t>(c)]);
       if (above) above->add_corner(x.in_above[static_cast<std::size_t>(c)]);
       if (up_i) {
+        if (pending_down >= 0)
+          link_above(pending_down, c);
+        else
+          first_up = c;
         pending_up = c;
-      } else if (pending_up >= 0) {
-        link(pending_up, c);
-        pending_up = -1;
+        pending_down = -1;
       } else {
-        first_down = c;
+        if (pending_up >= 0)
+          link_below(pending_up, c);
+        else
+          first_down = c;
+        pending_down = c;
+        pending_up = -1;
       }
     }
     ConvexPolyhedron* piece = up_i ? above : below;
     if (piece) piece->add_corner(at[i]);
     j = i;
   }
-  if (pending_up >= 0 && first_down >= 0) link(pending_up, first_down);
+  if (pending_up >= 0 && first_down >= 0) link_below(pending_up, first_down);
+  if (pending_down >= 0 && first_up >= 0) link_above(pending_down, first_up);
   if (below) below->close_face();
   if (above) above->close_face();
 }
