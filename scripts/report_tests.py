@@ -267,6 +267,40 @@ def disk_claim(results):
             last[RSPH2]["gap depth"] < last[RSPH1]["gap depth"])
 
 
+# ------------------------------------------------------------------------------------------ Sedov-Taylor
+def sedov_runs(suite):
+    runs = []
+    for n in pick(suite, [16], [16, 24], [16, 32, 48]):
+        size = f"{n}^3 particles"
+        guess = (n / 16) ** 4
+        runs.append(Run(SPH, size, "rsph-sedov", ["--n", n, "--method", "sph"], 2 * guess))
+        runs += rsph_both(size, "rsph-sedov", ["--n", n, "--method", "rsph"], guess)
+    return runs
+
+
+def sedov_measures(s):
+    return {"L1(rho)": s["L1_rho"], "shock radius error": s["shock_radius_error"],
+            "peak density": s["peak_density"], "centre's pressure / exact": s["central_pressure_ratio"],
+            "energy error": s["energy_error"]}
+
+
+def sedov_claim(results):
+    last = largest(results, SPH, RSPH1)
+    if last is None:
+        return None
+    sph, rsph = last[SPH], last[RSPH1]
+    claims = [("plain SPH keeps the blast's heat in the particles that received it: the centre's pressure over "
+               "the exact one (SPH's, above 2; RSPH's below half of it)", sph["centre's pressure / exact"],
+               sph["centre's pressure / exact"] > 2 and
+               rsph["centre's pressure / exact"] < 0.5 * sph["centre's pressure / exact"])]
+    first = [m for r, s, m in results if r.method == RSPH1]
+    if len(first) > 1:
+        ratio = first[-1]["L1(rho)"] / first[0]["L1(rho)"]
+        claims.append(("RSPH converges to the Sedov-Taylor profile: L1(rho) at the largest size over the smallest "
+                       "(below 1)", ratio, ratio < 1))
+    return claims
+
+
 class Test:
     def __init__(self, key, title, program, runs, measures, headline, claim, figure, reference):
         self.key, self.title, self.program = key, title, program
@@ -296,4 +330,6 @@ TESTS = [
          "|nu_eff / nu_s - 1|", ring_claim, "viscous_ring", "the analytic ring at the prescribed viscosity"),
     Test("planet_disk", "Planet-disk, Jupiter (§5, Figs. 12-16)", "rsph-planet-disk", disk_runs, disk_measures,
          "gap depth", disk_claim, "planet_disk", "FARGO3D's azimuthal average after 100 orbits (768 x 256, 196 608 cells)"),
+    Test("sedov", "Sedov-Taylor blast in 3D", "rsph-sedov", sedov_runs, plain(sedov_measures), "L1(rho)",
+         sedov_claim, "sedov", "the self-similar solution (xi0 from its energy integral)"),
 ]

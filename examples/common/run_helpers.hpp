@@ -3,6 +3,9 @@
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/json.hpp"
+#include "rsph/kernel/cubic_spline.hpp"
+#include "rsph/kernel/quintic_spline.hpp"
+#include "rsph/kernel/wendland.hpp"
 #include "rsph/regularize/remap_order.hpp"
 #include "rsph/simulation.hpp"
 
@@ -25,6 +28,25 @@ template <class Run>
 decltype(auto) with_remap(const std::string& remap, Run&& run) {
   if (remap == "second") return run(regularize::SecondOrder{});
   return run(regularize::FirstOrder{});
+}
+
+/// The kernels a program offers (`--kernel`): the cubic and quintic splines and Wendland's C2, C4 and C6.
+inline constexpr const char* kernel_names = "cubic, quintic, wendland-c2, wendland-c4, wendland-c6";
+inline void check_kernel(const std::string& name) {
+  require(name == "cubic" || name == "quintic" || name == "wendland-c2" || name == "wendland" ||
+              name == "wendland-c4" || name == "wendland-c6",
+          "unknown kernel '" + name + "' (" + kernel_names + ")");
+}
+
+/// Calls run(K{}) with the kernel `name` names ("wendland" is Wendland C2).
+template <class Run>
+decltype(auto) with_kernel(const std::string& name, Run&& run) {
+  check_kernel(name);
+  if (name == "quintic") return run(kernel::QuinticSpline{});
+  if (name == "wendland-c2" || name == "wendland") return run(kernel::WendlandC2{});
+  if (name == "wendland-c4") return run(kernel::WendlandC4{});
+  if (name == "wendland-c6") return run(kernel::WendlandC6{});
+  return run(kernel::CubicSpline{});
 }
 
 /// conservation.csv: one row per step of the conserved totals.

@@ -106,10 +106,7 @@ int run_method(const Options& opt) {
 
 template <int D>
 int run_kernel(const Options& opt) {
-  if (opt.kernel == "cubic") return run_method<D, kernel::CubicSpline>(opt);
-  if (opt.kernel == "quintic") return run_method<D, kernel::QuinticSpline>(opt);
-  if (opt.kernel == "wendland") return run_method<D, kernel::WendlandC2>(opt);
-  throw InputError("unknown kernel '" + opt.kernel + "' (cubic, quintic, wendland)");
+  return ex::with_kernel(opt.kernel, [&](auto k) { return run_method<D, decltype(k)>(opt); });
 }
 
 }  // namespace
@@ -129,7 +126,7 @@ int main(int argc, char** argv) {
     flag("t-end", opt.sod.t_end, "end time");
     flag("courant", opt.sod.courant, "Courant factor");
     flag("gamma", opt.sod.gamma, "ratio of specific heats");
-    flag("kernel", opt.kernel, "cubic, quintic or wendland");
+    flag("kernel", opt.kernel, ex::kernel_names);
     flag("snapshots", opt.snapshots, "HDF5 snapshots after the initial one");
     flag("method", opt.method, "sph: equal masses, grad-h; rsph: lattice regularization, levels in factors of two");
     flag("cycle", opt.rsph.cycle, "rsph: steps between regularizations");

@@ -15,6 +15,7 @@ RUNS = [
     ("rsph-drifting-pulse", "drifting_pulse", ["--preset", "quick"]),
     ("rsph-linear-wave", "linear_wave", ["--preset", "quick"]),
     ("rsph-strong-shock", "strong_shock", ["--preset", "quick"]),
+    ("rsph-sedov", "sedov", ["--preset", "quick"]),
     ("rsph-kelvin-helmholtz", "kelvin_helmholtz", ["--preset", "quick"]),
     ("rsph-viscous-ring", "viscous_ring", ["--preset", "quick", "--taus", "0.02,0.022"]),
     ("rsph-planet-disk", "planet_disk", ["--preset", "quick", "--orbits", 1, "--snapshot-every", 1]),
