@@ -1,4 +1,4 @@
-// Density (eq. 2) and force (eqs. 3-4) loops on a jittered 2D lattice, fixed h as on an RSPH lattice.
+// Density (eq. 2) and force (eqs. 3-4) loops on a jittered 2D or 3D lattice, fixed h as on an RSPH lattice.
 // Reported as particle updates per second (items_per_second), serial and with all threads.
 #include "rsph/rsph.hpp"
 
@@ -16,46 +16,57 @@ using namespace rsph;
 
 namespace {
 
-using Sim = Simulation<2, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity>;
+template <int D>
+using Sim = Simulation<D, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity>;
 
-std::unique_ptr<Sim> make_lattice(std::int64_t n_particles, double h_over_dx) {
-  const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(n_particles))));
+/// About n_particles on a periodic unit lattice (n^D sites), jittered by 0.05 of the spacing, random velocities.
+template <int D>
+std::unique_ptr<Sim<D>> make_lattice(std::int64_t n_particles, double h_over_dx) {
+  const int n = static_cast<int>(std::lround(std::pow(static_cast<double>(n_particles), 1.0 / D)));
   const double dx = 1.0 / n;
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-0.05, 0.05);
-  ParticleSet<2, true> p;
-  p.reserve(static_cast<std::size_t>(n) * n);
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i)
-      p.add(dx * dx, Vec<2>((i + 0.5 + u(rng)) * dx, (j + 0.5 + u(rng)) * dx), Vec<2>(u(rng), u(rng)), h_over_dx * dx,
-            1.0);
-  Box<2> box;
-  box.edge = {Edge::periodic, Edge::periodic};
-  return std::make_unique<Sim>(std::move(p), box, eos::IdealGas{1.4}, regularize::None{}, TimeStepParams{},
-                               physics::ArtificialViscosity{1.0, 2.0});
+  ParticleSet<D, true> p;
+  const int nz = D == 3 ? n : 1;
+  p.reserve(static_cast<std::size_t>(n) * n * nz);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const int index[3] = {i, j, k};
+        Vec<D> x, v;
+        for (int c = 0; c < D; ++c) {
+          x[c] = (index[c] + 0.5 + u(rng)) * dx;
+          v[c] = u(rng);
+        }
+        p.add(std::pow(dx, D), x, v, h_over_dx * dx, 1.0);
+      }
+  Box<D> box;
+  for (int c = 0; c < D; ++c) box.edge[static_cast<std::size_t>(c)] = Edge::periodic;
+  return std::make_unique<Sim<D>>(std::move(p), box, eos::IdealGas{1.4}, regularize::None{}, TimeStepParams{},
+                                  physics::ArtificialViscosity{1.0, 2.0});
 }
 
 // The passes alone (physics/loops/), over the particles, ghosts and neighbour lists the simulation set up.
-template <bool Forces>
+template <int D, bool Forces>
 void BM_loop(benchmark::State& state) {
   const double h_over_dx = static_cast<double>(state.range(1)) / 10.0;
   const int threads = bench::use_threads(state);
-  auto sim = make_lattice(state.range(0), h_over_dx);
+  auto sim = make_lattice<D>(state.range(0), h_over_dx);
   auto p = sim->particles();
   const auto& nl = sim->neighbor_list();
   const neighbors::FirstN rows{p.n_real};
   const auto terms = std::tuple{physics::ArtificialViscosity{1.0, 2.0}};
   std::vector<double> P_over_rho2, v_sig, drho_dt;
   physics::loops::NumberDensity unused;
-  physics::loops::update_pressure<2>(sim->eos(), p, P_over_rho2);
+  physics::loops::update_pressure<D>(sim->eos(), p, P_over_rho2);
   for (auto _ : state) {
     if constexpr (Forces) {
-      physics::loops::ForceFields<2> fields;
+      physics::loops::ForceFields<D> fields;
       fields.P_over_rho2 = P_over_rho2;
-      physics::loops::force_rows<Sim::LoopScheme, false>(p, nl, rows, fields, terms, 0.0, {v_sig, drho_dt});
+      physics::loops::force_rows<typename Sim<D>::LoopScheme, false>(p, nl, rows, fields, terms, 0.0, {v_sig, drho_dt});
     } else {
-      physics::loops::density_rows<Sim::KernelType, 2, true, false>(p, nl, rows, unused);
-      physics::loops::update_pressure<2>(sim->eos(), p, P_over_rho2);
+      physics::loops::density_rows<typename Sim<D>::KernelType, D, true, false>(p, nl, rows, unused);
+      physics::loops::update_pressure<D>(sim->eos(), p, P_over_rho2);
     }
     benchmark::DoNotOptimize(p.rho.data());
   }
@@ -65,16 +76,21 @@ void BM_loop(benchmark::State& state) {
   state.counters["neighbours"] = static_cast<double>(sim->neighbor_list().pairs()) / static_cast<double>(n);
 }
 
-void BM_density(benchmark::State& s) { BM_loop<false>(s); }
-void BM_forces(benchmark::State& s) { BM_loop<true>(s); }
+void BM_density(benchmark::State& s) { BM_loop<2, false>(s); }
+void BM_forces(benchmark::State& s) { BM_loop<2, true>(s); }
+void BM_density3d(benchmark::State& s) { BM_loop<3, false>(s); }
+void BM_forces3d(benchmark::State& s) { BM_loop<3, true>(s); }
 
-void BM_all_rates(benchmark::State& state) {
+template <int D>
+void all_rates(benchmark::State& state) {
   const int threads = bench::use_threads(state);
-  auto sim = make_lattice(state.range(0), static_cast<double>(state.range(1)) / 10.0);
+  auto sim = make_lattice<D>(state.range(0), static_cast<double>(state.range(1)) / 10.0);
   for (auto _ : state) sim->compute_rates();  // ghosts, cell list, neighbour lists, density and forces
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(sim->particles().n_real));
   state.counters["threads"] = threads;
 }
+void BM_all_rates(benchmark::State& s) { all_rates<2>(s); }
+void BM_all_rates3d(benchmark::State& s) { all_rates<3>(s); }
 
 // {particles, 10 h/dx, threads (0: all)}
 void sizes(benchmark::internal::Benchmark* b) {
@@ -89,4 +105,7 @@ void sizes(benchmark::internal::Benchmark* b) {
 BENCHMARK(BM_density)->Apply(sizes);
 BENCHMARK(BM_forces)->Apply(sizes);
 BENCHMARK(BM_all_rates)->Apply(sizes);
+BENCHMARK(BM_density3d)->Apply(sizes);
+BENCHMARK(BM_forces3d)->Apply(sizes);
+BENCHMARK(BM_all_rates3d)->Apply(sizes);
 BENCHMARK_MAIN();

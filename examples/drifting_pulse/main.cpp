@@ -22,18 +22,20 @@ struct Options {
   ex::CommonOptions common;
   std::string shifts_text = "0.01,0.1,0.5,1.0";
   std::string counts_text = "0,100,200,300,400";
+  int dim = 1;
 };
 
 /// The options from the command line, or none when --help was asked for.
 std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
-  auto& [base, common, shifts_text, counts_text] = opt;
+  auto& [base, common, shifts_text, counts_text, dim] = opt;
   ex::po::options_description desc("rsph-drifting-pulse options");
   ex::Flags flag(desc, common);
-  ex::add_common_options(flag, common, "--counts 0,10,20,30,40");
+  ex::add_common_options(flag, common, "--counts 0,10,20,30,40; in 3D --cells 16");
+  flag("dim", dim, "1; 2 or 3 for a square or a cube drifting along the box's diagonal");
   flag("shifts", shifts_text, "cases: T_reg v_d / Delta, comma separated");
   flag("counts", counts_text, "regularization counts to record");
-  flag("cells", base.cells, "lattice sites on the periodic line");
+  flag("cells", base.cells, "lattice sites along each side (default 128 in 1D, 64 in 2D, 32 in 3D)");
   flag("pulse-width", base.pulse_width, "pulse width in spacings");
   flag("contrast", base.contrast, "pulse density over the background");
   flag("h-over-dx", base.h_over_dx, "h / Delta");
@@ -41,11 +43,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
   ex::po::variables_map vm;
   if (!ex::parse(
           argc, argv, desc, vm,
-          "rsph-drifting-pulse: a square pulse drifting through a periodic 1D lattice, regularized every T_reg.\n"
-          "Usage: rsph-drifting-pulse [--shifts 0.01,0.1,0.5,1.0] [--counts 0,100,...] [--out DIR]"))
+          "rsph-drifting-pulse: a square pulse drifting through a periodic lattice, regularized every T_reg.\n"
+          "Usage: rsph-drifting-pulse [--dim 1|2|3] [--shifts 0.01,0.1,0.5,1.0] [--counts 0,100,...] [--out DIR]"))
     return std::nullopt;
+  if (dim < 1 || dim > 3) throw InputError("--dim must be 1, 2 or 3 (got " + std::to_string(dim) + ")");
+  if (vm["cells"].defaulted()) base.cells = dim == 1 ? 128 : (dim == 2 ? 64 : 32);
   if (ex::quick_preset(common)) {
     if (vm["counts"].defaulted()) counts_text = "0,10,20,30,40";
+    if (vm["cells"].defaulted() && dim == 3) base.cells = 16;
   }
   ex::record_run(common, argc, argv);
   return opt;
@@ -53,16 +58,80 @@ std::optional<Options> parse_options(int argc, char** argv) {
 
 /// One shift's figures, as summary.json reports them.
 struct PulseCase {
-  std::vector<double> widths;  ///< at each count reached so far
+  std::vector<double> widths;  ///< at each count reached so far (in 2D and 3D the rms over axes)
+  std::vector<double> axes;    ///< 2D, 3D: the widths along each axis at each count, one count after another
   double mass_error = 0.0, kinetic = 0.0;
   std::uint64_t regularizations = 0;
 };
 
 std::string shift_tag(double shift) { return fmt::format("{:g}", shift); }
 
-int run(Options opt) {
-  auto& [base, common, shifts_text, counts_text] = opt;
-  ex::apply_threads(common.threads);
+/// What every shift's run adds to: the curves, the checkpoint's parts, the cost.
+struct PulseRun {
+  io::CsvWriter widths;
+  std::vector<PulseCase> results;  // one per shift begun
+  std::uint64_t steps = 0, updates = 0;
+  double reg_seconds = 0.0;
+};
+
+/// One shift: the pulse regularized through every count, its profile, snapshot and widths at each.
+template <int D>
+void run_case(scenes::DriftingPulseParams s, const std::vector<int>& counts, const std::filesystem::path& dir,
+              ex::Checkpoints& checkpoints, PulseRun& run) {
+  ex::with_remap(s.remap, [&](auto order) {
+    auto sim = scenes::make_drifting_pulse<D>(s, order);
+    const double m0 = sim.totals().mass;
+    const auto case_dir = dir / ("shift_" + shift_tag(s.shift));
+    io::ensure_directory(case_dir);
+    run.results.emplace_back();
+    std::vector<ex::AfterRegularizations> stops;
+    for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
+    ex::Snapshots snapshots(case_dir);
+    const auto case_part = checkpoints.add("case", [&](io::Archive& ar) { snapshots.checkpoint(ar); });
+    const auto cost = ex::run_stops(
+        sim, stops, ex::NoHook{},
+        [&](const auto& sm, int k) {
+          if (k < 0) return;
+          const int count = counts[static_cast<std::size_t>(k)];
+          const auto x = scenes::comoving_positions(sm, s.v_drift);
+          const auto& p = sm.particles();
+          io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
+          for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
+          csv.close();
+          snapshots.write(sm);
+          const auto [axes, w] = scenes::pulse_widths(sm, s);
+          run.results.back().widths.push_back(w);
+          std::vector<double> row{s.shift, static_cast<double>(count), w};
+          if constexpr (D > 1) {
+            auto& all = run.results.back().axes;
+            all.insert(all.end(), axes.begin(), axes.end());
+            row.insert(row.end(), axes.begin(), axes.end());
+          }
+          run.widths.row(row);
+        },
+        &checkpoints);
+    auto& result = run.results.back();
+    result.mass_error = ex::relative_change(sim.totals().mass, m0);
+    result.regularizations = sim.regularizations();
+    result.kinetic = sim.kinetic_energy_removed();
+    run.steps += cost.steps;
+    run.updates += cost.updates;
+    run.reg_seconds += cost.phases.regularization;
+    fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", shift_tag(s.shift),
+               counts.back(), scenes::pulse_widths(sim, s).second, result.mass_error);
+  });
+}
+
+std::vector<std::string> width_columns(int dim) {
+  std::vector<std::string> c{"shift", "regularizations", "width_mass"};
+  const char* axis[] = {"width_x", "width_y", "width_z"};
+  for (int k = 0; dim > 1 && k < dim; ++k) c.emplace_back(axis[k]);
+  return c;
+}
+
+template <int D>
+int run_dim(Options opt) {
+  auto& [base, common, shifts_text, counts_text, dim] = opt;
   const auto shifts = ex::parse_numbers(shifts_text, "--shifts");
   std::vector<int> counts;
   for (double c : ex::parse_numbers(counts_text, "--counts")) {
@@ -76,18 +145,17 @@ int run(Options opt) {
   io::Json summary, cases;
   summary.set("test", "drifting_pulse").set("cells", base.cells).set("h_over_dx", base.h_over_dx);
   summary.set("remap", base.remap);
-  std::uint64_t steps = 0, updates = 0;
-  double reg_seconds = 0.0;
-  io::CsvWriter widths(dir / "widths.csv", {"shift", "regularizations", "width_mass"});
-  std::vector<PulseCase> results;  // one per shift begun
+  if (D > 1) summary.set("dim", D);
+  PulseRun run{io::CsvWriter(dir / "widths.csv", width_columns(D)), {}, 0, 0, 0.0};
   ex::Checkpoints checkpoints(common, dir, "rsph-drifting-pulse");
   const auto part = checkpoints.add("program", [&](io::Archive& ar) {
-    widths.checkpoint(ar, "widths");
-    ar("steps", steps);
-    ar("updates", updates);
-    ar("regularization_seconds", reg_seconds);
-    ar.records("cases", results, [](io::Archive& a, PulseCase& c) {
+    run.widths.checkpoint(ar, "widths");
+    ar("steps", run.steps);
+    ar("updates", run.updates);
+    ar("regularization_seconds", run.reg_seconds);
+    ar.records("cases", run.results, [](io::Archive& a, PulseCase& c) {
       a("widths", c.widths);
+      a("widths_along_axes", c.axes);
       a("mass_error", c.mass_error);
       a("kinetic_energy_dissipated", c.kinetic);
       a("regularizations", c.regularizations);
@@ -98,61 +166,42 @@ int run(Options opt) {
   for (std::size_t i = resumed_case > 0 ? resumed_case - 1 : 0; i < shifts.size(); ++i) {
     auto s = base;
     s.shift = shifts[i];
-    ex::with_remap(s.remap, [&](auto order) {
-      auto sim = scenes::make_drifting_pulse(s, order);
-      const double m0 = sim.totals().mass;
-      const auto case_dir = dir / ("shift_" + shift_tag(shifts[i]));
-      io::ensure_directory(case_dir);
-      results.emplace_back();
-      std::vector<ex::AfterRegularizations> stops;
-      for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
-      ex::Snapshots snapshots(case_dir);
-      const auto case_part = checkpoints.add("case", [&](io::Archive& ar) { snapshots.checkpoint(ar); });
-      const auto cost = ex::run_stops(
-          sim, stops, ex::NoHook{},
-          [&](const auto& sm, int k) {
-            if (k < 0) return;
-            const int count = counts[static_cast<std::size_t>(k)];
-            const auto x = scenes::comoving_positions(sm, s.v_drift);
-            const auto& p = sm.particles();
-            io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
-            for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
-            csv.close();
-            snapshots.write(sm);
-            const double w = scenes::pulse_width_mass(sm, s);
-            results.back().widths.push_back(w);
-            widths.row({shifts[i], static_cast<double>(count), w});
-          },
-          &checkpoints);
-      auto& result = results.back();
-      result.mass_error = ex::relative_change(sim.totals().mass, m0);
-      result.regularizations = sim.regularizations();
-      result.kinetic = sim.kinetic_energy_removed();
-      steps += cost.steps;
-      updates += cost.updates;
-      reg_seconds += cost.phases.regularization;
-      fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n",
-                 shift_tag(shifts[i]), counts.back(), scenes::pulse_width_mass(sim, s), result.mass_error);
-    });
+    run_case<D>(s, counts, dir, checkpoints, run);
   }
   for (std::size_t i = 0; i < shifts.size(); ++i) {
     io::Json width_json, c;
-    for (std::size_t k = 0; k < counts.size(); ++k) width_json.set(std::to_string(counts[k]), results[i].widths[k]);
-    c.set("width_mass", width_json).set("mass_error", results[i].mass_error);
-    c.set("regularizations", results[i].regularizations);
-    c.set("kinetic_energy_dissipated", results[i].kinetic);
+    for (std::size_t k = 0; k < counts.size(); ++k) width_json.set(std::to_string(counts[k]), run.results[i].widths[k]);
+    c.set("width_mass", width_json).set("mass_error", run.results[i].mass_error);
+    if (D > 1) {
+      io::Json axes_json;
+      const auto& all = run.results[i].axes;
+      for (std::size_t k = 0; k < counts.size(); ++k)
+        axes_json.set(std::to_string(counts[k]),
+                      std::vector<double>(all.begin() + static_cast<std::ptrdiff_t>(D * k),
+                                          all.begin() + static_cast<std::ptrdiff_t>(D * k + D)));
+      c.set("width_mass_axes", axes_json);
+    }
+    c.set("regularizations", run.results[i].regularizations);
+    c.set("kinetic_energy_dissipated", run.results[i].kinetic);
     cases.set(shift_tag(shifts[i]), c);
   }
-  widths.close();
+  run.widths.close();
   const double wall = ex::seconds_since(wall0);
-  summary.set("cases", cases).set("wall_seconds", wall).set("steps", steps);
-  summary.set("particle_updates_per_second", static_cast<double>(updates) / wall);
-  summary.set("regularization_seconds", reg_seconds);
+  summary.set("cases", cases).set("wall_seconds", wall).set("steps", run.steps);
+  summary.set("particle_updates_per_second", static_cast<double>(run.updates) / wall);
+  summary.set("regularization_seconds", run.reg_seconds);
   ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
   ex::draw_figure(common, dir, "drifting_pulse");
   fmt::print("output: {}\n", dir.string());
   return 0;
+}
+
+int run(Options opt) {
+  ex::apply_threads(opt.common.threads);
+  if (opt.dim == 3) return run_dim<3>(std::move(opt));
+  if (opt.dim == 2) return run_dim<2>(std::move(opt));
+  return run_dim<1>(std::move(opt));
 }
 
 }  // namespace

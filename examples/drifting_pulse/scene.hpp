@@ -1,17 +1,20 @@
 #pragma once
 // §2.1 of the paper: a force-free 1D square density pulse drifting with v_d through a periodic line,
-// regularized every T_reg; the remap alone diffuses it, most when T_reg v_d / Delta = 1/2.
+// regularized every T_reg; the remap alone diffuses it, most when T_reg v_d / Delta = 1/2. In 2D and 3D the
+// pulse is a square (cube) drifting along the box's diagonal, v_d along every axis.
 #include "common/run_helpers.hpp"
 #include "rsph/rsph.hpp"
 
+#include <array>
 #include <cmath>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace rsph::scenes {
 
 struct DriftingPulseParams {
-  int cells = 128;         ///< lattice sites on the periodic line
+  int cells = 128;         ///< lattice sites along each side of the periodic line (square, cube)
   int pulse_width = 4;     ///< pulse width in spacings (the paper: 4 Delta)
   double contrast = 2.0;   ///< density inside the pulse over the background
   double h_over_dx = 1.4;  ///< the paper: h = 1.4 Delta
@@ -22,7 +25,7 @@ struct DriftingPulseParams {
   void validate() const {
     require(cells >= 8, "drifting pulse: need at least 8 lattice cells (got " + std::to_string(cells) + ")");
     require(pulse_width >= 1 && pulse_width < cells / 2,
-            "drifting pulse: the pulse must be narrower than half the line");
+            "drifting pulse: the pulse must be narrower than half the box");
     require(h_over_dx > 0.0, "drifting pulse: h/dx must be positive (got " + std::to_string(h_over_dx) + ")");
     require(shift > 0.0, "drifting pulse: T_reg v_d / Delta must be positive");
     require(v_drift > 0.0, "drifting pulse: the drift speed must be positive");
@@ -33,51 +36,68 @@ struct DriftingPulseParams {
   double T_reg() const { return shift * spacing() / v_drift; }
 };
 
-template <class Order = regularize::FirstOrder>
-using DriftRegularizer = regularize::LatticeRegularizer<lattice::Uniform1D, schedule::EveryT, geometry::LocalVoronoi,
-                                                        region::Unbounded, Order>;
-template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
-using DriftingPulse = Simulation<1, Kernel, eos::Pressureless, DriftRegularizer<Order>>;
+template <int D>
+using DriftLattice =
+    std::conditional_t<D == 1, lattice::Uniform1D, std::conditional_t<D == 2, lattice::Square, lattice::Cubic>>;
+template <int D>
+using DriftCells = std::conditional_t<D == 3, geometry::LocalVoronoi3, geometry::LocalVoronoi>;
+template <class Order = regularize::FirstOrder, int D = 1>
+using DriftRegularizer =
+    regularize::LatticeRegularizer<DriftLattice<D>, schedule::EveryT, DriftCells<D>, region::Unbounded, Order>;
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder, int D = 1>
+using DriftingPulse = Simulation<D, Kernel, eos::Pressureless, DriftRegularizer<Order, D>>;
 
-template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
-DriftingPulse<Kernel, Order> make_drifting_pulse(const DriftingPulseParams& s, Order order = {}) {
+/// The lattice of cells^D sites, density `contrast` in the pulse of pulse_width^D sites at the centre and 1
+/// elsewhere, every particle drifting with v_d along each axis.
+template <int D = 1, class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
+DriftingPulse<Kernel, Order, D> make_drifting_pulse(const DriftingPulseParams& s, Order order = {}) {
   s.validate();
   const double dx = s.spacing();
-  ParticleSet<1, false> p;
+  ParticleSet<D, false> p;
   const int first = s.cells / 2 - s.pulse_width / 2;
-  for (int i = 0; i < s.cells; ++i) {
-    const double rho = (i >= first && i < first + s.pulse_width) ? s.contrast : 1.0;
-    p.add(rho * dx, Vec<1>((i + 0.5) * dx), Vec<1>(s.v_drift), s.h_over_dx * dx);
-  }
-  Box<1> box;
-  box.edge = {Edge::periodic};
+  auto inside = [&](int i) { return i >= first && i < first + s.pulse_width; };
+  std::array<int, 3> i{0, 0, 0};
+  const int ny = D >= 2 ? s.cells : 1, nz = D == 3 ? s.cells : 1;
+  for (i[2] = 0; i[2] < nz; ++i[2])
+    for (i[1] = 0; i[1] < ny; ++i[1])
+      for (i[0] = 0; i[0] < s.cells; ++i[0]) {
+        bool in = true;
+        Vec<D> x;
+        for (int k = 0; k < D; ++k) {
+          x[k] = (i[static_cast<std::size_t>(k)] + 0.5) * dx;
+          in = in && inside(i[static_cast<std::size_t>(k)]);
+        }
+        p.add((in ? s.contrast : 1.0) * std::pow(dx, D), x, Vec<D>::Constant(s.v_drift), s.h_over_dx * dx);
+      }
+  Box<D> box;
+  for (int k = 0; k < D; ++k) box.edge[static_cast<std::size_t>(k)] = Edge::periodic;
   TimeStepParams ts;
   ts.dt_max = s.T_reg();  // force-free: one step per regularization
-  return DriftingPulse<Kernel, Order>(std::move(p), box, eos::Pressureless{},
-                                      DriftRegularizer<Order>(lattice::Uniform1D{dx}, schedule::EveryT{s.T_reg()},
-                                                              {.remap = {s.h_over_dx}, .order = order}),
-                                      ts);
+  return DriftingPulse<Kernel, Order, D>(std::move(p), box, eos::Pressureless{},
+                                         DriftRegularizer<Order, D>(DriftLattice<D>{dx}, schedule::EveryT{s.T_reg()},
+                                                                    {.remap = {s.h_over_dx}, .order = order}),
+                                         ts);
 }
 
-/// Positions in the frame moving with the drift, wrapped so the pulse sits where it started.
+/// Positions along `axis` in the frame moving with the drift, wrapped so the pulse sits where it started.
 template <class Sim>
-std::vector<double> comoving_positions(const Sim& sim, double v_drift) {
+std::vector<double> comoving_positions(const Sim& sim, double v_drift, int axis = 0) {
   std::vector<double> x;
   const auto& p = sim.particles();
   for (std::size_t a = 0; a < p.n_real; ++a) {
-    double xc = p.x[a][0] - v_drift * sim.time();
+    double xc = p.x[a][axis] - v_drift * sim.time();
     xc -= std::floor(xc);
     x.push_back(xc);
   }
   return x;
 }
 
-/// Pulse width: sqrt of the second central moment of the excess mass over the background, in Delta.
+/// Pulse width along `axis`: sqrt of the second central moment of the excess mass over the background, in Delta.
 template <class Sim>
-double pulse_width_mass(const Sim& sim, const DriftingPulseParams& s) {
-  const auto x = comoving_positions(sim, s.v_drift);
+double pulse_width_mass(const Sim& sim, const DriftingPulseParams& s, int axis = 0) {
+  const auto x = comoving_positions(sim, s.v_drift, axis);
   const auto& p = sim.particles();
-  const double background = s.spacing();  // background mass per particle (rho = 1)
+  const double background = std::pow(s.spacing(), Sim::dim);  // background mass per particle (rho = 1)
   double M = 0.0, mean = 0.0, var = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) {
     M += p.m[a] - background;
@@ -86,6 +106,18 @@ double pulse_width_mass(const Sim& sim, const DriftingPulseParams& s) {
   mean /= M;
   for (std::size_t a = 0; a < p.n_real; ++a) var += (p.m[a] - background) * (x[a] - mean) * (x[a] - mean);
   return std::sqrt(std::max(var / M, 0.0)) / s.spacing();
+}
+
+/// The widths along every axis, and their root mean square (the 1D width in 1D).
+template <class Sim>
+std::pair<std::vector<double>, double> pulse_widths(const Sim& sim, const DriftingPulseParams& s) {
+  std::vector<double> w;
+  double sum2 = 0.0;
+  for (int k = 0; k < Sim::dim; ++k) {
+    w.push_back(pulse_width_mass(sim, s, k));
+    sum2 += w.back() * w.back();
+  }
+  return {w, std::sqrt(sum2 / Sim::dim)};
 }
 
 }  // namespace rsph::scenes

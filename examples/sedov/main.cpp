@@ -49,7 +49,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("h-max", s.h_max, "RSPH, Appendix A: ... or rises above this");
   flag("dn-max", s.dN_max, "RSPH, Appendix A: delta N_max");
   flag("max-steps", s.max_steps, "RSPH, Appendix A: most steps between regularizations");
-  flag("bins", s.bins, "radial bins of the profile out to 1.5 R (0: one per lattice spacing)");
+  flag("bins", s.bins,
+       "radial bins of the profile inside the exact shock radius R, half as many beyond (0: about one per lattice "
+       "spacing)");
   ex::po::variables_map vm;
   if (!ex::parse(argc, argv, desc, vm,
                  "rsph-sedov: energy E = 1 at the centre of a uniform gas (rho = 1, P = 1e-5, gamma = 5/3) in a\n"

@@ -78,7 +78,7 @@ int run(const Options& opt, Sim sim) {
   summary.set("p_star_exact", exact.p_star()).set("v_star_exact", exact.v_star());
   ex::write_cost(summary, cost);
   ex::write_scheme(summary, sim);
-  if constexpr (requires { sim.regularizer().log(); })
+  if constexpr (D < 3 && requires { sim.regularizer().log(); })
     summary.set("max_level", opt.rsph.refinement.levels).set("cycle", static_cast<std::uint64_t>(opt.rsph.cycle));
   ex::write_run_record(summary, opt.common);
   summary.write(dir / "summary.json");
@@ -97,9 +97,13 @@ int run_method(const Options& opt) {
   if (opt.method == "rsph")
     return ex::with_remap(opt.rsph.remap, [&](auto order) {
       using Order = decltype(order);
-      if (opt.consistent_gradient)
-        return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, opt.gradient));
-      return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph));
+      if constexpr (D == 3) {
+        return run<D, Kernel>(opt, scenes::make_rsph_sod3<Kernel, Order>(opt.sod, opt.rsph));
+      } else {
+        if (opt.consistent_gradient)
+          return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, opt.gradient));
+        return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph));
+      }
     });
   throw InputError("unknown method '" + opt.method + "' (sph, rsph)");
 }
@@ -116,10 +120,10 @@ int main(int argc, char** argv) {
     Options opt;
     ex::po::options_description desc("rsph-sod options");
     ex::Flags flag(desc, opt.common);
-    ex::add_common_options(flag, opt.common, "--n-left 200 --snapshots 2");
-    flag("dim", opt.dim, "1, or 2 for a strip periodic in y");
+    ex::add_common_options(flag, opt.common, "--n-left 200 --snapshots 2; in 3D --n-left 100 --ny-left 4");
+    flag("dim", opt.dim, "1, 2 for a strip periodic in y, or 3 for a tube periodic in y and z");
     flag("n-left", opt.sod.n_left, "particles across the left half");
-    flag("ny-left", opt.sod.ny_left, "2D: particles across the strip (left state)");
+    flag("ny-left", opt.sod.ny_left, "2D, 3D: particles across the strip (tube) along y (and z), left state");
     flag("h-over-dx", opt.sod.h_over_dx, "h / particle spacing");
     flag("alpha", opt.sod.alpha, "artificial viscosity alpha");
     flag("beta", opt.sod.beta, "artificial viscosity beta");
@@ -141,10 +145,11 @@ int main(int argc, char** argv) {
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-sod: Sod's shock tube, plain SPH or RSPH, against the exact solution.\n"
-                   "Usage: rsph-sod [--dim 1|2] [--method sph|rsph] [--preset quick|paper] [--out DIR] ..."))
+                   "Usage: rsph-sod [--dim 1|2|3] [--method sph|rsph] [--preset quick|paper] [--out DIR] ..."))
       return 0;
     if (ex::quick_preset(opt.common)) {
-      if (vm["n-left"].defaulted()) opt.sod.n_left = 200;
+      if (vm["n-left"].defaulted()) opt.sod.n_left = opt.dim == 3 ? 100 : 200;
+      if (vm["ny-left"].defaulted() && opt.dim == 3) opt.sod.ny_left = 4;
       if (vm["snapshots"].defaulted()) opt.snapshots = 2;
     }
     require(opt.snapshots >= 1, "--snapshots must be at least 1 (got " + std::to_string(opt.snapshots) + ")");
@@ -152,6 +157,11 @@ int main(int argc, char** argv) {
     ex::apply_threads(opt.common.threads);
     if (opt.dim == 1) return run_kernel<1>(opt);
     if (opt.dim == 2) return run_kernel<2>(opt);
-    throw InputError("--dim must be 1 or 2 (got " + std::to_string(opt.dim) + ")");
+    if (opt.dim == 3) {
+      require(opt.method != "rsph" || (vm["levels"].defaulted() && !opt.consistent_gradient),
+              "3D RSPH runs on the uniform cubic lattice: --levels and --consistent-gradient are 1D and 2D only");
+      return run_kernel<3>(opt);
+    }
+    throw InputError("--dim must be 1, 2 or 3 (got " + std::to_string(opt.dim) + ")");
   });
 }

@@ -34,49 +34,57 @@ template <int D, class Kernel>
 using SodSimulation =
     Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<D>>;
 
-/// Equal-mass particles in 1D (spacing ratio 8 across the membrane); in 2D a lattice of spacing dx on
-/// the left and 2 dx on the right so both tile the periodic strip (masses differ by the density ratio
-/// over 4).
+/// The walls at x = 0 and 1; in 2D and 3D the cross-section periodic, `width` wide.
+template <int D>
+Box<D> sod_box(double width) {
+  Box<D> box;
+  box.lo.setZero();
+  box.hi.setConstant(width);
+  box.hi[0] = 1.0;
+  box.edge[0] = Edge::reflecting;
+  for (int k = 1; k < D; ++k) box.edge[static_cast<std::size_t>(k)] = Edge::periodic;
+  return box;
+}
+
+/// A block of nx x ny^(D-1) lattice particles of spacing dx from x0 on, masses state.rho dx^D / bias.
+template <int D>
+void add_sod_block(ParticleSet<D, true>& p, const analysis::GasState& state, const eos::IdealGas& gas, double x0,
+                   int nx, int ny, double dx, double h_over_dx, double bias) {
+  const int nz = D == 3 ? ny : 1, nyy = D >= 2 ? ny : 1;
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < nyy; ++j)
+      for (int i = 0; i < nx; ++i) {
+        Vec<D> x;
+        x[0] = x0 + (i + 0.5) * dx;
+        if constexpr (D >= 2) x[1] = (j + 0.5) * dx;
+        if constexpr (D == 3) x[2] = (k + 0.5) * dx;
+        Vec<D> v = Vec<D>::Zero();
+        v[0] = state.v;
+        p.add(state.rho * std::pow(dx, D) / bias, x, v, h_over_dx * dx, gas.internal_energy(state.rho, state.P));
+      }
+}
+
+/// Equal-mass particles in 1D (spacing ratio 8 across the membrane); in 2D and 3D a lattice of spacing dx on
+/// the left and 2 dx on the right so both tile the periodic cross-section (masses differ by the density ratio
+/// over 2^D: in 3D they are equal).
 template <int D, class Kernel>
-requires(D == 1 || D == 2) SodSimulation<D, Kernel> make_sod(const SodParams& s) {
+SodSimulation<D, Kernel> make_sod(const SodParams& s) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   gas.validate();
   ParticleSet<D, true> p;
-  Box<D> box;
-  box.lo.setZero();
-  box.hi.setOnes();
-  box.edge[0] = Edge::reflecting;
   const double dx_left = 0.5 / s.n_left;
   const double ratio = D == 1 ? s.left.rho / s.right.rho : 2.0;
   const int n_right = std::max(1, static_cast<int>(std::lround(s.n_left / ratio)));
   const double dx_right = 0.5 / n_right;
-  int ny_left = 1, ny_right = 1;
-  if constexpr (D == 2) {
-    ny_left = s.ny_left;
-    ny_right = s.ny_left / 2;
-    box.hi[1] = ny_left * dx_left;
-    box.edge[1] = Edge::periodic;
-  }
+  const int ny_left = D == 1 ? 1 : s.ny_left, ny_right = D == 1 ? 1 : s.ny_left / 2;
   // Masses so that the SPH density of each lattice block equals its nominal density.
   const double bias = kernel::lattice_sum<Kernel, D>(s.h_over_dx);
-  auto add_block = [&](const analysis::GasState& state, double x0, int nx, int ny, double dx) {
-    const double vol = (D == 1 ? dx : dx * dx) / bias;
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        Vec<D> x;
-        x[0] = x0 + (i + 0.5) * dx;
-        if constexpr (D == 2) x[1] = (j + 0.5) * dx;
-        Vec<D> v = Vec<D>::Zero();
-        v[0] = state.v;
-        p.add(state.rho * vol, x, v, s.h_over_dx * dx, gas.internal_energy(state.rho, state.P));
-      }
-  };
-  add_block(s.left, 0.0, s.n_left, ny_left, dx_left);
-  add_block(s.right, 0.5, n_right, ny_right, dx_right);
+  add_sod_block(p, s.left, gas, 0.0, s.n_left, ny_left, dx_left, s.h_over_dx, bias);
+  add_sod_block(p, s.right, gas, 0.5, n_right, ny_right, dx_right, s.h_over_dx, bias);
   TimeStepParams ts;
   ts.courant = s.courant;
-  return SodSimulation<D, Kernel>(std::move(p), box, gas, regularize::None{}, ts,
+  return SodSimulation<D, Kernel>(std::move(p), sod_box<D>(ny_left * dx_left), gas, regularize::None{}, ts,
                                   physics::ArtificialViscosity{s.alpha, s.beta}, physics::GradH<D>{s.h_over_dx});
 }
 
@@ -152,6 +160,37 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Order, Extra...> make_rs
       std::move(p), box, gas,
       RsphSodRegularizer<D, Order>(std::move(ml), schedule::EveryNSteps{r.cycle}, {.remap = remap}), ts,
       physics::ArtificialViscosity{s.alpha, s.beta}, extra...);
+}
+
+/// RSPH in 3D: the uniform cubic lattice of the finest spacing 0.5 / n_left (multi-level lattices are 2D so far),
+/// regularized every `cycle` steps; masses rho Delta^3 over the lattice sum, so the SPH density of each state is
+/// its own.
+template <class Order = regularize::FirstOrder>
+using RsphSod3Regularizer = regularize::LatticeRegularizer<lattice::Cubic, schedule::EveryNSteps,
+                                                           geometry::LocalVoronoi3, region::Unbounded, Order>;
+template <class Kernel, class Order>
+using RsphSod3Simulation =
+    Simulation<3, Kernel, eos::IdealGas, RsphSod3Regularizer<Order>, physics::ArtificialViscosity>;
+
+template <class Kernel, class Order = regularize::FirstOrder>
+RsphSod3Simulation<Kernel, Order> make_rsph_sod3(const SodParams& s, const RsphSodParams& r) {
+  s.validate();
+  r.validate();
+  const eos::IdealGas gas{s.gamma};
+  gas.validate();
+  const double dx = 0.5 / s.n_left;
+  ParticleSet<3, true> p;
+  const double bias = kernel::lattice_sum<Kernel, 3>(s.h_over_dx);
+  add_sod_block(p, s.left, gas, 0.0, s.n_left, s.ny_left, dx, s.h_over_dx, bias);
+  add_sod_block(p, s.right, gas, 0.5, s.n_left, s.ny_left, dx, s.h_over_dx, bias);
+  TimeStepParams ts;
+  ts.courant = s.courant;
+  ts.max_bin = r.max_bin;
+  return RsphSod3Simulation<Kernel, Order>(
+      std::move(p), sod_box<3>(s.ny_left * dx), gas,
+      RsphSod3Regularizer<Order>(lattice::Cubic{dx}, schedule::EveryNSteps{r.cycle},
+                                 {.remap = regularize::RemapParams{s.h_over_dx}}),
+      ts, physics::ArtificialViscosity{s.alpha, s.beta});
 }
 
 }  // namespace rsph::scenes
