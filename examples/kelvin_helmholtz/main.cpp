@@ -20,15 +20,18 @@ struct Options {
   scenes::KelvinHelmholtzParams s;
   ex::CommonOptions common;
   std::string method = "rsph";
+  int dim = 2;
 };
 
 /// The options from the command line, or none when --help was asked for.
 std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
-  auto& [s, common, method] = opt;
+  auto& [s, common, method, dim] = opt;
   ex::po::options_description desc("rsph-kelvin-helmholtz options");
   ex::Flags flag(desc, common);
   ex::add_common_options(flag, common, "--cells 64");
+  flag("dim", dim, "2, or 3 for the layer extruded along z (periodic)");
+  flag("depth", s.depth, "3D: the box's depth along z in lattice spacings");
   flag("method", method, "rsph or sph");
   flag("conductivity", s.alpha_u, "artificial conductivity alpha_u (0: off)");
   flag("cells", s.cells, "1 / Delta");
@@ -44,20 +47,21 @@ std::optional<Options> parse_options(int argc, char** argv) {
   ex::po::variables_map vm;
   if (!ex::parse(argc, argv, desc, vm,
                  "rsph-kelvin-helmholtz: Kelvin-Helmholtz instability at density ratio 10.\n"
-                 "Usage: rsph-kelvin-helmholtz --method rsph|sph [--conductivity 1] [--out DIR]"))
+                 "Usage: rsph-kelvin-helmholtz --method rsph|sph [--dim 2|3] [--conductivity 1] [--out DIR]"))
     return std::nullopt;
   if (ex::quick_preset(common)) {
     if (vm["cells"].defaulted()) s.cells = 64;
   }
   if (method != "rsph" && method != "sph") throw InputError("unknown method '" + method + "' (rsph, sph)");
+  if (dim != 2 && dim != 3) throw InputError("--dim must be 2 or 3 (got " + std::to_string(dim) + ")");
   s.validate();
   ex::record_run(common, argc, argv);
   return opt;
 }
 
-int run(Options opt) {
-  auto& [s, common, method] = opt;
-  ex::apply_threads(common.threads);
+template <int D>
+int run_dim(Options opt) {
+  auto& [s, common, method, dim] = opt;
   const auto dir = ex::prepare_output(common);
   io::Progress progress("rsph-kelvin-helmholtz " + method, s.end_time());
   auto on_step = [&](const auto& sim) {
@@ -70,12 +74,12 @@ int run(Options opt) {
   };
   {
     // the initial state, for the record
-    const auto p0 = method == "rsph" ? scenes::kh_lattice(s, s.h_over_dx) : scenes::kh_equal_mass(s);
+    const auto p0 = method == "rsph" ? scenes::kh_lattice<D>(s, s.h_over_dx) : scenes::kh_equal_mass<D>(s);
     io::write_snapshot(dir / io::snapshot_name(0), p0, 0.0, 0,
-                       io::describe_run(s.box(), eos::IdealGas{s.gamma}, "dimensionless code units"));
+                       io::describe_run(s.box<D>(), eos::IdealGas{s.gamma}, "dimensionless code units"));
   }
   ex::Checkpoints checkpoints(common, dir, "rsph-kelvin-helmholtz");
-  const auto r = scenes::run_kelvin_helmholtz(method == "rsph", s, on_step, on_end, &checkpoints);
+  const auto r = scenes::run_kelvin_helmholtz<D>(method == "rsph", s, on_step, on_end, &checkpoints);
   progress.finish();
   io::CsvWriter csv(dir / "amplitude.csv", {"time", "amplitude"});
   for (std::size_t i = 0; i < r.t.size(); ++i) csv.row({r.t[i], r.amplitude[i]});
@@ -87,6 +91,7 @@ int run(Options opt) {
   summary.set("test", "kelvin_helmholtz").set("method", method).set("alpha_u", s.alpha_u).set("cells", s.cells);
   summary.set("h_over_dx", s.h_over_dx).set("courant", s.courant).set("wavelengths", s.wavelengths);
   summary.set("density_ratio", s.chi).set("seed_amplitude", s.A);
+  if (D == 3) summary.set("dim", D).set("depth", s.depth);
   if (method == "rsph") summary.set("reg_steps", s.reg_steps);
   summary.set("particles", r.particles_final).set("tau_KH", s.tau_KH()).set("time", r.t.back());
   summary.set("amplitude_seed", r.seed).set("amplitude_final", r.amplitude_final);
@@ -115,6 +120,11 @@ int run(Options opt) {
   fmt::print("{}; shear-layer momentum thickness {:.2e}; energy error {:.1e}\n", line, r.thickness.back(),
              r.energy_error);
   return 0;
+}
+
+int run(Options opt) {
+  ex::apply_threads(opt.common.threads);
+  return opt.dim == 3 ? run_dim<3>(std::move(opt)) : run_dim<2>(std::move(opt));
 }
 
 }  // namespace

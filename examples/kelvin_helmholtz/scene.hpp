@@ -4,6 +4,7 @@
 // 1 below; P = 2.5; gamma = 5/3; v_x = 0.5 below, -0.5 above; v_y = A sin(-k (x + 0.5)) within 0.025 of
 // the interface, A = 0.025, k = 12 pi; no artificial viscosity. The box holds six wavelengths of the seeded
 // mode; `wavelengths` narrows it (periodic, so one wavelength evolves the seeded mode alike at a sixth of the cost).
+// In 3D the layer is extruded along z over `depth` lattice spacings, periodic in z.
 #include "common/runner.hpp"
 #include "rsph/rsph.hpp"
 
@@ -12,6 +13,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace rsph::scenes {
@@ -27,6 +29,7 @@ struct KelvinHelmholtzParams {
   double t_end = 0.0;  ///< 0: tau_KH
   double courant = 0.3;
   int wavelengths = 6;  ///< box width in wavelengths 2 pi / k of the seeded mode (6: the paper's -0.5 < x < 0.5)
+  int depth = 8;        ///< 3D: the box's depth along z in lattice spacings (periodic)
   std::string remap = "first";  ///< RSPH: the remap's order, first (eqs. 6-9) or second
 
   /// Lattice columns across the box: the box is columns() * Delta wide.
@@ -42,6 +45,7 @@ struct KelvinHelmholtzParams {
     require(h_over_dx > 0.0, "Kelvin-Helmholtz: h/Delta must be positive (got " + std::to_string(h_over_dx) + ")");
     require(chi >= 1.0, "Kelvin-Helmholtz: the density ratio must be >= 1");
     require(reg_steps >= 1, "Kelvin-Helmholtz: regularize at least every step");
+    require(depth >= 2, "Kelvin-Helmholtz: the 3D box needs a depth of at least 2 spacings");
     require(alpha_u >= 0.0, "Kelvin-Helmholtz: alpha_u must be non-negative");
     require(A >= 0.0, "Kelvin-Helmholtz: the seed amplitude must be non-negative");
     examples::check_remap(remap);
@@ -49,16 +53,27 @@ struct KelvinHelmholtzParams {
   /// 2 pi over the incompressible growth rate k dv sqrt(chi) / (1 + chi): 0.58 for the paper's setup.
   double tau_KH() const { return 2.0 * std::numbers::pi / (k * dv * std::sqrt(chi) / (1.0 + chi)); }
   double end_time() const { return t_end > 0.0 ? t_end : tau_KH(); }
-  Box<2> box() const {
-    Box<2> b;
-    b.lo = Vec<2>(-0.5, 0.0);
-    b.hi = Vec<2>(-0.5 + static_cast<double>(columns()) / cells, 0.5);
-    b.edge = {Edge::periodic, Edge::reflecting};
+  template <int D = 2>
+  Box<D> box() const {
+    Box<D> b;
+    b.lo.setZero();
+    b.lo[0] = -0.5;
+    b.hi[0] = -0.5 + static_cast<double>(columns()) / cells;
+    b.hi[1] = 0.5;
+    b.edge[0] = Edge::periodic;
+    b.edge[1] = Edge::reflecting;
+    if constexpr (D == 3) {
+      b.hi[2] = static_cast<double>(depth) / cells;
+      b.edge[2] = Edge::periodic;
+    }
     return b;
   }
-  Vec<2> velocity(const Vec<2>& x) const {
-    const double vy = std::abs(x[1] - 0.25) < layer ? A * std::sin(-k * (x[0] + 0.5)) : 0.0;
-    return Vec<2>(x[1] < 0.25 ? 0.5 * dv : -0.5 * dv, vy);
+  template <int D>
+  Vec<D> velocity(const Vec<D>& x) const {
+    Vec<D> v = Vec<D>::Zero();
+    v[0] = x[1] < 0.25 ? 0.5 * dv : -0.5 * dv;
+    v[1] = std::abs(x[1] - 0.25) < layer ? A * std::sin(-k * (x[0] + 0.5)) : 0.0;
+    return v;
   }
 };
 
@@ -82,7 +97,7 @@ double mode_amplitude(const P& p, double k) {
 /// (dv / 2) tanh(y / delta). What the flow's own mixing and the method's dissipation have widened it to.
 template <class P>
 double momentum_thickness(const P& p, const KelvinHelmholtzParams& s) {
-  const Box<2> box = s.box();
+  const Box<2> box = s.box();  // the rows along y, in 2D and 3D alike
   const auto rows = static_cast<std::size_t>(s.cells / 2);
   const double dy = box.size()[1] / static_cast<double>(rows);
   std::vector<double> V(rows, 0.0), Vv(rows, 0.0);
@@ -98,41 +113,57 @@ double momentum_thickness(const P& p, const KelvinHelmholtzParams& s) {
   return theta;
 }
 
-/// RSPH: a square lattice; masses give rho through the lattice sum.
-inline ParticleSet<2, true> kh_lattice(const KelvinHelmholtzParams& s, double h_over_dx) {
+/// RSPH: a square (cubic) lattice; masses give rho through the lattice sum.
+template <int D = 2>
+ParticleSet<D, true> kh_lattice(const KelvinHelmholtzParams& s, double h_over_dx) {
   s.validate();
   const double dx = 1.0 / s.cells;
   const eos::IdealGas gas{s.gamma};
-  const double bias = kernel::lattice_sum<kernel::CubicSpline, 2>(h_over_dx);
-  ParticleSet<2, true> p;
-  for (int j = 0; j < s.cells / 2; ++j)
-    for (int i = 0; i < s.columns(); ++i) {
-      const Vec<2> x(-0.5 + (i + 0.5) * dx, (j + 0.5) * dx);
-      const double rho = x[1] > 0.25 ? s.chi : 1.0;
-      p.add(rho * dx * dx / bias, x, s.velocity(x), h_over_dx * dx, gas.internal_energy(rho, s.P));
-    }
+  const double bias = kernel::lattice_sum<kernel::CubicSpline, D>(h_over_dx);
+  ParticleSet<D, true> p;
+  for (int l = 0; l < (D == 3 ? s.depth : 1); ++l)
+    for (int j = 0; j < s.cells / 2; ++j)
+      for (int i = 0; i < s.columns(); ++i) {
+        Vec<D> x;
+        x[0] = -0.5 + (i + 0.5) * dx;
+        x[1] = (j + 0.5) * dx;
+        if constexpr (D == 3) x[2] = (l + 0.5) * dx;
+        const double rho = x[1] > 0.25 ? s.chi : 1.0;
+        const double m = D == 2 ? rho * dx * dx / bias : rho * dx * dx * dx / bias;
+        p.add(m, x, s.velocity(x), h_over_dx * dx, gas.internal_energy(rho, s.P));
+      }
   return p;
 }
 
-/// Plain SPH: equal masses, spacing Delta below and Delta / sqrt(chi) above (rounded to tile the box).
-inline ParticleSet<2, true> kh_equal_mass(const KelvinHelmholtzParams& s) {
+/// Plain SPH: equal masses, spacing Delta below and Delta / chi^(1/D) above (rounded to tile the box; in 3D
+/// along z too).
+template <int D = 2>
+ParticleSet<D, true> kh_equal_mass(const KelvinHelmholtzParams& s) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
-  const double width = s.box().size()[0];
-  ParticleSet<2, true> p;
+  const auto size = s.box<D>().size();
+  ParticleSet<D, true> p;
   auto block = [&](double rho, double y0, double y1, int nx) {
-    const double dx = width / nx;
+    const double dx = size[0] / nx;
     const int ny = std::max(1, static_cast<int>(std::lround((y1 - y0) / dx)));
-    const double dy = (y1 - y0) / ny;
-    const double bias = kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) {
-        const Vec<2> x(-0.5 + (i + 0.5) * dx, y0 + (j + 0.5) * dy);
-        p.add(rho * dx * dy / bias, x, s.velocity(x), s.h_over_dx * std::sqrt(dx * dy), gas.internal_energy(rho, s.P));
-      }
+    const int nz = D == 3 ? std::max(1, static_cast<int>(std::lround(size[D - 1] / dx))) : 1;
+    const double dy = (y1 - y0) / ny, dz = D == 3 ? size[D - 1] / nz : 1.0;
+    const double bias = kernel::lattice_sum<kernel::CubicSpline, D>(s.h_over_dx);
+    const double vol = dx * dy * dz;
+    for (int l = 0; l < nz; ++l)
+      for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+          Vec<D> x;
+          x[0] = -0.5 + (i + 0.5) * dx;
+          x[1] = y0 + (j + 0.5) * dy;
+          if constexpr (D == 3) x[2] = (l + 0.5) * dz;
+          p.add(rho * dx * dy * dz / bias, x, s.velocity(x),
+                s.h_over_dx * (D == 2 ? std::sqrt(dx * dy) : std::cbrt(vol)), gas.internal_energy(rho, s.P));
+        }
   };
   block(1.0, 0.0, 0.25, s.columns());
-  block(s.chi, 0.25, 0.5, static_cast<int>(std::lround(s.columns() * std::sqrt(s.chi))));
+  const double ratio = D == 2 ? std::sqrt(s.chi) : std::cbrt(s.chi);  // equal masses: chi^(1/D) more per axis
+  block(s.chi, 0.25, 0.5, static_cast<int>(std::lround(s.columns() * ratio)));
   return p;
 }
 
@@ -211,23 +242,30 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
       examples::NoHook{}, checkpoints);
   on_end(sim);
   r.amplitude_final = r.amplitude.back();
-  if (s.chi > 1.0) r.folds = interface_folds(sim.particles(), s);
+  if constexpr (Sim::dim == 2)
+    if (s.chi > 1.0) r.folds = interface_folds(sim.particles(), s);
   r.contact = contact_measures(sim.particles(), s);
   r.growth_rate = fitted_growth_rate(r.t, r.amplitude, 0.1 * s.tau_KH(), 0.5 * s.tau_KH());
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
   return r;
 }
 
-/// The scene's methods: RSPH on the square lattice, regularized every reg_steps, and grad-h SPH with equal
-/// masses; each with Price's conductivity or without.
+/// The scene's methods: RSPH on the square (cubic) lattice, regularized every reg_steps, and grad-h SPH with
+/// equal masses; each with Price's conductivity or without.
 using KhKernel = kernel::CubicSpline;
-template <class Order = regularize::FirstOrder>
-using KhRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::EveryNSteps, geometry::LocalVoronoi,
-                                                     region::Unbounded, Order>;
+template <class Order = regularize::FirstOrder, int D = 2>
+using KhRegularizer =
+    regularize::LatticeRegularizer<std::conditional_t<D == 3, lattice::Cubic, lattice::Square>, schedule::EveryNSteps,
+                                   std::conditional_t<D == 3, geometry::LocalVoronoi3, geometry::LocalVoronoi>,
+                                   region::Unbounded, Order>;
 template <class Order, class... Terms>
 using RsphKh = Simulation<2, KhKernel, eos::IdealGas, KhRegularizer<Order>, Terms...>;
+template <class Order, class... Terms>
+using RsphKh3 = Simulation<3, KhKernel, eos::IdealGas, KhRegularizer<Order, 3>, Terms...>;
+template <int D, class... Terms>
+using SphKhD = Simulation<D, KhKernel, eos::IdealGas, regularize::None, physics::GradH<D>, Terms...>;
 template <class... Terms>
-using SphKh = Simulation<2, KhKernel, eos::IdealGas, regularize::None, physics::GradH<2>, Terms...>;
+using SphKh = SphKhD<2, Terms...>;
 
 inline TimeStepParams kh_time_steps(const KelvinHelmholtzParams& s) {
   TimeStepParams ts;
@@ -235,33 +273,34 @@ inline TimeStepParams kh_time_steps(const KelvinHelmholtzParams& s) {
   return ts;
 }
 
-template <class Order, class... Terms>
-RsphKh<Order, Terms...> make_rsph_kh(const KelvinHelmholtzParams& s, Order order, Terms... terms) {
-  return RsphKh<Order, Terms...>(
-      kh_lattice(s, s.h_over_dx), s.box(), eos::IdealGas{s.gamma},
-      KhRegularizer<Order>(lattice::Square{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
-                           {.remap = {s.h_over_dx}, .order = order}),
-      kh_time_steps(s), terms...);
+template <int D = 2, class Order, class... Terms>
+auto make_rsph_kh(const KelvinHelmholtzParams& s, Order order, Terms... terms) {
+  using Sim = Simulation<D, KhKernel, eos::IdealGas, KhRegularizer<Order, D>, Terms...>;
+  using Lattice = std::conditional_t<D == 3, lattice::Cubic, lattice::Square>;
+  return Sim(kh_lattice<D>(s, s.h_over_dx), s.box<D>(), eos::IdealGas{s.gamma},
+             KhRegularizer<Order, D>(Lattice{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
+                                     {.remap = {s.h_over_dx}, .order = order}),
+             kh_time_steps(s), terms...);
 }
 
-template <class... Terms>
-SphKh<Terms...> make_sph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
-  return SphKh<Terms...>(kh_equal_mass(s), s.box(), eos::IdealGas{s.gamma}, regularize::None{}, kh_time_steps(s),
-                         physics::GradH<2>{s.h_over_dx}, terms...);
+template <int D = 2, class... Terms>
+SphKhD<D, Terms...> make_sph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
+  return SphKhD<D, Terms...>(kh_equal_mass<D>(s), s.box<D>(), eos::IdealGas{s.gamma}, regularize::None{},
+                             kh_time_steps(s), physics::GradH<D>{s.h_over_dx}, terms...);
 }
 
 /// Runs one of the variants: RSPH (with either remap) or SPH, with conductivity when alpha_u > 0; with
 /// checkpoints, as they say.
-template <class OnStep, class OnEnd>
+template <int D = 2, class OnStep, class OnEnd>
 KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end,
                            examples::Checkpoints* checkpoints = nullptr) {
   auto run = [&](auto sim) { return run_kh(sim, s, on_step, on_end, checkpoints); };
   const physics::ArtificialConductivity conduct{s.alpha_u};
   if (rsph)
     return examples::with_remap(s.remap, [&](auto order) {
-      return s.alpha_u > 0 ? run(make_rsph_kh(s, order, conduct)) : run(make_rsph_kh(s, order));
+      return s.alpha_u > 0 ? run(make_rsph_kh<D>(s, order, conduct)) : run(make_rsph_kh<D>(s, order));
     });
-  return s.alpha_u > 0 ? run(make_sph_kh(s, conduct)) : run(make_sph_kh(s));
+  return s.alpha_u > 0 ? run(make_sph_kh<D>(s, conduct)) : run(make_sph_kh<D>(s));
 }
 
 }  // namespace rsph::scenes
