@@ -1,5 +1,6 @@
 #!/usr/bin/python3
-"""Four panels like Fig. 2 of the paper: co-moving density profiles after 0..400 regularizations.
+"""Four panels like Fig. 2 of the paper: co-moving density profiles after 0..400 regularizations (in 2D and 3D
+the densest particle at each x, through the pulse's centre).
 
 Usage: plot_drifting_pulse.py DIR [DIR ...] [--png FILE]   (a row per folder; FILE defaults to
 DIR/drifting_pulse.png of the first)
@@ -40,6 +41,11 @@ def draw_row(axes, out, summary, shifts):
             n = int(re.search(r"profile_(\d+)", path).group(1))
             p = read_csv(path)
             rows = sorted(zip(p["x"], p["rho"]))
+            if summary.get("dim", 1) > 1:  # a square or cube: the densest particle at each x, through its centre
+                densest = {}
+                for x, rho in rows:
+                    densest[round(x, 6)] = max(rho, densest.get(round(x, 6), rho))
+                rows = sorted(densest.items())
             ax.plot([r[0] for r in rows], [r[1] for r in rows], linestyle=style, color="k", lw=1, label=f"{n}")
         widths = summary["cases"][shift]["width_mass"]
         last = max(widths, key=int)
