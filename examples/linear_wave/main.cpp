@@ -28,7 +28,7 @@ int main(int argc, char** argv) {
     flag("amplitude", s.amplitude, "density amplitude delta rho / rho");
     flag("jitter", s.jitter, "random initial displacement in Delta (seeds instabilities)");
     flag("courant", s.courant, "Courant factor");
-    flag("kernel", kernel_name, "quintic (the paper's) or cubic");
+    flag("kernel", kernel_name, "quintic (the paper's), cubic, wendland-c2, wendland-c4 or wendland-c6");
     ex::po::variables_map vm;
     if (!ex::parse(argc, argv, desc, vm,
                    "rsph-linear-wave: an isothermal sound wave in a periodic 2 x 0.5 wavelength box.\n"
@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
       if (vm["wavelength"].defaulted()) s.wavelength_cells = 12;
     }
     s.validate();
+    ex::check_kernel(kernel_name);
     ex::record_run(common, argc, argv);
     ex::apply_threads(common.threads);
     const auto dir = ex::prepare_output(common);
@@ -51,12 +52,8 @@ int main(int argc, char** argv) {
     ex::Checkpoints checkpoints(common, dir, "rsph-linear-wave");
     const auto part = checkpoints.add("program", [&](io::Archive& ar) { snapshots.checkpoint(ar); });
     scenes::LinearWaveResult res;
-    if (kernel_name == "quintic")
-      res = scenes::run_linear_wave<kernel::QuinticSpline>(s, on_step, at_stop, &checkpoints);
-    else if (kernel_name == "cubic")
-      res = scenes::run_linear_wave<kernel::CubicSpline>(s, on_step, at_stop, &checkpoints);
-    else
-      throw InputError("unknown kernel '" + kernel_name + "' (quintic, cubic)");
+    res = ex::with_kernel(
+        kernel_name, [&](auto k) { return scenes::run_linear_wave<decltype(k)>(s, on_step, at_stop, &checkpoints); });
     progress.finish();
     io::CsvWriter csv(dir / "sensor.csv", {"time", "delta_rho"});
     for (std::size_t i = 0; i < res.t.size(); ++i) csv.row({res.t[i], res.delta_rho[i]});
