@@ -70,12 +70,10 @@ class SedovTaylor {
     const double w = (lambda - a.lambda) / (b.lambda - a.lambda);
     return {lambda, a.f + w * (b.f - a.f), a.g + w * (b.g - a.g), a.h + w * (b.h - a.h)};
   }
-  /// The integrated table, lambda increasing to the shock at 1.
-  const std::vector<SedovPoint>& table() const { return table_; }
   /// sigma_j int_0^1 g lambda^(j-1) d lambda over sigma_j / j: the swept-up mass over the mass the sphere
   /// held before the blast, 1 for an exact solution.
   double mass_ratio() const {
-    return j_ * integral([](const SedovPoint& p, double) { return p.g; });
+    return j_ * integral([](const SedovPoint& p) { return p.g; });
   }
   /// The strong-shock density jump (gamma + 1) / (gamma - 1).
   double density_jump() const { return (gamma_ + 1.0) / (gamma_ - 1.0); }
@@ -95,8 +93,7 @@ class SedovTaylor {
 
   /// Classical fourth-order Runge-Kutta in ln lambda from the shock to lambda = 1e-3.
   void integrate() {
-    const double gp = gamma_ + 1.0;
-    State s{2.0 / gp, gp / (gamma_ - 1.0), 2.0 / gp};  // the strong-shock jump
+    State s{2.0 / (gamma_ + 1.0), density_jump(), 2.0 / (gamma_ + 1.0)};  // the strong-shock jump
     const int steps = 12000;
     const double x_end = std::log(1e-3), dx = x_end / steps;
     auto rhs = [&](double x, const State& y) {
@@ -124,14 +121,14 @@ class SedovTaylor {
     centre_slope_ = a.g > 0.0 && b.g > 0.0 ? std::log(b.g / a.g) / std::log(b.lambda / a.lambda) : 0.0;
   }
 
-  /// int_0^1 q(point, lambda) lambda^(j-1) d lambda by the trapezoid rule over the table (the part below its
+  /// int_0^1 q(point) lambda^(j-1) d lambda by the trapezoid rule over the table (the part below its
   /// first point, O(1e-3^j), left out).
   template <class Q>
   double integral(Q&& q) const {
     double sum = 0.0;
     for (std::size_t i = 1; i < table_.size(); ++i) {
       const SedovPoint &a = table_[i - 1], &b = table_[i];
-      const double qa = q(a, a.lambda) * std::pow(a.lambda, j_ - 1), qb = q(b, b.lambda) * std::pow(b.lambda, j_ - 1);
+      const double qa = q(a) * std::pow(a.lambda, j_ - 1), qb = q(b) * std::pow(b.lambda, j_ - 1);
       sum += 0.5 * (qa + qb) * (b.lambda - a.lambda);
     }
     return sum;
@@ -141,8 +138,7 @@ class SedovTaylor {
   double energy_integral() const {
     const double sigma = j_ == 1 ? 2.0 : (j_ == 2 ? 2.0 * std::numbers::pi : 4.0 * std::numbers::pi);
     const double k = 2.0 / (j_ + 2.0);
-    return sigma * k * k *
-           integral([&](const SedovPoint& p, double) { return 0.5 * p.g * p.f * p.f + p.h / (gamma_ - 1.0); });
+    return sigma * k * k * integral([&](const SedovPoint& p) { return 0.5 * p.g * p.f * p.f + p.h / (gamma_ - 1.0); });
   }
 
   int j_;
