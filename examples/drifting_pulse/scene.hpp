@@ -2,6 +2,7 @@
 // §2.1 of the paper: a force-free 1D square density pulse drifting with v_d through a periodic line,
 // regularized every T_reg; the remap alone diffuses it, most when T_reg v_d / Delta = 1/2. In 2D and 3D the
 // pulse is a square (cube) drifting along the box's diagonal, v_d along every axis.
+#include "common/blocks.hpp"
 #include "common/run_helpers.hpp"
 #include "rsph/rsph.hpp"
 
@@ -36,14 +37,10 @@ struct DriftingPulseParams {
   double T_reg() const { return shift * spacing() / v_drift; }
 };
 
-template <int D>
-using DriftLattice =
-    std::conditional_t<D == 1, lattice::Uniform1D, std::conditional_t<D == 2, lattice::Square, lattice::Cubic>>;
-template <int D>
-using DriftCells = std::conditional_t<D == 3, geometry::LocalVoronoi3, geometry::LocalVoronoi>;
 template <class Order = regularize::FirstOrder, int D = 1>
 using DriftRegularizer =
-    regularize::LatticeRegularizer<DriftLattice<D>, schedule::EveryT, DriftCells<D>, region::Unbounded, Order>;
+    regularize::LatticeRegularizer<lattice::Cartesian<D>, schedule::EveryT,
+                                   typename geometry::DefaultCellBuilder<D>::type, region::Unbounded, Order>;
 template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder, int D = 1>
 using DriftingPulse = Simulation<D, Kernel, eos::Pressureless, DriftRegularizer<Order, D>>;
 
@@ -56,27 +53,22 @@ DriftingPulse<Kernel, Order, D> make_drifting_pulse(const DriftingPulseParams& s
   ParticleSet<D, false> p;
   const int first = s.cells / 2 - s.pulse_width / 2;
   auto inside = [&](int i) { return i >= first && i < first + s.pulse_width; };
-  std::array<int, 3> i{0, 0, 0};
-  const int ny = D >= 2 ? s.cells : 1, nz = D == 3 ? s.cells : 1;
-  for (i[2] = 0; i[2] < nz; ++i[2])
-    for (i[1] = 0; i[1] < ny; ++i[1])
-      for (i[0] = 0; i[0] < s.cells; ++i[0]) {
+  const int n = s.cells;
+  examples::for_each_block_site<D>(
+      {n, n, n}, Vec<D>::Zero(), Vec<D>::Constant(dx), [&](const Vec<D>& x, const auto& i) {
         bool in = true;
-        Vec<D> x;
-        for (int k = 0; k < D; ++k) {
-          x[k] = (i[static_cast<std::size_t>(k)] + 0.5) * dx;
-          in = in && inside(i[static_cast<std::size_t>(k)]);
-        }
+        for (std::size_t k = 0; k < D; ++k) in = in && inside(i[k]);
         p.add((in ? s.contrast : 1.0) * std::pow(dx, D), x, Vec<D>::Constant(s.v_drift), s.h_over_dx * dx);
-      }
+      });
   Box<D> box;
   for (int k = 0; k < D; ++k) box.edge[static_cast<std::size_t>(k)] = Edge::periodic;
   TimeStepParams ts;
   ts.dt_max = s.T_reg();  // force-free: one step per regularization
-  return DriftingPulse<Kernel, Order, D>(std::move(p), box, eos::Pressureless{},
-                                         DriftRegularizer<Order, D>(DriftLattice<D>{dx}, schedule::EveryT{s.T_reg()},
-                                                                    {.remap = {s.h_over_dx}, .order = order}),
-                                         ts);
+  return DriftingPulse<Kernel, Order, D>(
+      std::move(p), box, eos::Pressureless{},
+      DriftRegularizer<Order, D>(lattice::Cartesian<D>{dx}, schedule::EveryT{s.T_reg()},
+                                 {.remap = {s.h_over_dx}, .order = order}),
+      ts);
 }
 
 /// Positions along `axis` in the frame moving with the drift, wrapped so the pulse sits where it started.

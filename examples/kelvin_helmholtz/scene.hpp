@@ -5,6 +5,7 @@
 // the interface, A = 0.025, k = 12 pi; no artificial viscosity. The box holds six wavelengths of the seeded
 // mode; `wavelengths` narrows it (periodic, so one wavelength evolves the seeded mode alike at a sixth of the cost).
 // In 3D the layer is extruded along z over `depth` lattice spacings, periodic in z.
+#include "common/blocks.hpp"
 #include "common/runner.hpp"
 #include "rsph/rsph.hpp"
 
@@ -121,17 +122,14 @@ ParticleSet<D, true> kh_lattice(const KelvinHelmholtzParams& s, double h_over_dx
   const eos::IdealGas gas{s.gamma};
   const double bias = kernel::lattice_sum<kernel::CubicSpline, D>(h_over_dx);
   ParticleSet<D, true> p;
-  for (int l = 0; l < (D == 3 ? s.depth : 1); ++l)
-    for (int j = 0; j < s.cells / 2; ++j)
-      for (int i = 0; i < s.columns(); ++i) {
-        Vec<D> x;
-        x[0] = -0.5 + (i + 0.5) * dx;
-        x[1] = (j + 0.5) * dx;
-        if constexpr (D == 3) x[2] = (l + 0.5) * dx;
-        const double rho = x[1] > 0.25 ? s.chi : 1.0;
-        const double m = D == 2 ? rho * dx * dx / bias : rho * dx * dx * dx / bias;
-        p.add(m, x, s.velocity(x), h_over_dx * dx, gas.internal_energy(rho, s.P));
-      }
+  Vec<D> lo = Vec<D>::Zero();
+  lo[0] = -0.5;
+  examples::for_each_block_site<D>({s.columns(), s.cells / 2, s.depth}, lo, Vec<D>::Constant(dx),
+                                   [&](const Vec<D>& x, auto) {
+                                     const double rho = x[1] > 0.25 ? s.chi : 1.0;
+                                     const double m = D == 2 ? rho * dx * dx / bias : rho * dx * dx * dx / bias;
+                                     p.add(m, x, s.velocity(x), h_over_dx * dx, gas.internal_energy(rho, s.P));
+                                   });
   return p;
 }
 
@@ -150,16 +148,15 @@ ParticleSet<D, true> kh_equal_mass(const KelvinHelmholtzParams& s) {
     const double dy = (y1 - y0) / ny, dz = D == 3 ? size[D - 1] / nz : 1.0;
     const double bias = kernel::lattice_sum<kernel::CubicSpline, D>(s.h_over_dx);
     const double vol = dx * dy * dz;
-    for (int l = 0; l < nz; ++l)
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i) {
-          Vec<D> x;
-          x[0] = -0.5 + (i + 0.5) * dx;
-          x[1] = y0 + (j + 0.5) * dy;
-          if constexpr (D == 3) x[2] = (l + 0.5) * dz;
-          p.add(rho * dx * dy * dz / bias, x, s.velocity(x),
-                s.h_over_dx * (D == 2 ? std::sqrt(dx * dy) : std::cbrt(vol)), gas.internal_energy(rho, s.P));
-        }
+    Vec<D> lo = Vec<D>::Zero(), spacing = Vec<D>::Constant(dz);
+    lo[0] = -0.5;
+    lo[1] = y0;
+    spacing[0] = dx;
+    spacing[1] = dy;
+    examples::for_each_block_site<D>({nx, ny, nz}, lo, spacing, [&](const Vec<D>& x, auto) {
+      p.add(rho * dx * dy * dz / bias, x, s.velocity(x), s.h_over_dx * (D == 2 ? std::sqrt(dx * dy) : std::cbrt(vol)),
+            gas.internal_energy(rho, s.P));
+    });
   };
   block(1.0, 0.0, 0.25, s.columns());
   const double ratio = D == 2 ? std::sqrt(s.chi) : std::cbrt(s.chi);  // equal masses: chi^(1/D) more per axis
@@ -255,9 +252,8 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
 using KhKernel = kernel::CubicSpline;
 template <class Order = regularize::FirstOrder, int D = 2>
 using KhRegularizer =
-    regularize::LatticeRegularizer<std::conditional_t<D == 3, lattice::Cubic, lattice::Square>, schedule::EveryNSteps,
-                                   std::conditional_t<D == 3, geometry::LocalVoronoi3, geometry::LocalVoronoi>,
-                                   region::Unbounded, Order>;
+    regularize::LatticeRegularizer<lattice::Cartesian<D>, schedule::EveryNSteps,
+                                   typename geometry::DefaultCellBuilder<D>::type, region::Unbounded, Order>;
 template <class Order, class... Terms>
 using RsphKh = Simulation<2, KhKernel, eos::IdealGas, KhRegularizer<Order>, Terms...>;
 template <class Order, class... Terms>
@@ -276,9 +272,8 @@ inline TimeStepParams kh_time_steps(const KelvinHelmholtzParams& s) {
 template <int D = 2, class Order, class... Terms>
 auto make_rsph_kh(const KelvinHelmholtzParams& s, Order order, Terms... terms) {
   using Sim = Simulation<D, KhKernel, eos::IdealGas, KhRegularizer<Order, D>, Terms...>;
-  using Lattice = std::conditional_t<D == 3, lattice::Cubic, lattice::Square>;
   return Sim(kh_lattice<D>(s, s.h_over_dx), s.box<D>(), eos::IdealGas{s.gamma},
-             KhRegularizer<Order, D>(Lattice{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
+             KhRegularizer<Order, D>(lattice::Cartesian<D>{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
                                      {.remap = {s.h_over_dx}, .order = order}),
              kh_time_steps(s), terms...);
 }

@@ -3,6 +3,7 @@
 // 5/3) in a periodic box of unit side, run until the shock reaches 0.35 of the box, in 3D (and 2D, where it is
 // the cylindrical blast). Plain grad-h SPH against RSPH (the adaptive regularization of Appendix A onto the
 // cubic or square lattice), both with Monaghan-Gingold viscosity; the exact solution is analysis::SedovTaylor.
+#include "common/blocks.hpp"
 #include "common/runner.hpp"
 #include "rsph/rsph.hpp"
 
@@ -51,6 +52,7 @@ struct SedovParams {
 /// What a run leaves for the report, beside its cost.
 struct SedovRun : examples::RunCost {
   double time = 0.0, radius_exact = 0.0, radius = 0.0;  ///< the shock's radius, exact and measured
+  double xi0 = 0.0, jump = 0.0;                 ///< the exact solution's R(t) constant and strong-shock density jump
   double peak_density = 0.0, peak_exact = 0.0;  ///< the binned profile's peak, and the exact one over the same bins
   double L1_rho = 0.0;                          ///< mean |rho - exact| over the bins out to about 1.5 R
   double energy_error = 0.0;                    ///< |E_end - E_0| / E_0 (total energy, ambient heat included)
@@ -69,15 +71,9 @@ ParticleSet<D, true> sedov_particles(const SedovParams& s, double bias) {
   const double dx = 1.0 / n, vol = std::pow(dx, D), h = s.h_over_dx * dx;
   const eos::IdealGas gas{s.gamma};
   ParticleSet<D, true> p;
-  std::array<int, 3> i{0, 0, 0};
-  const int nz = D == 3 ? n : 1;
-  for (i[2] = 0; i[2] < nz; ++i[2])
-    for (i[1] = 0; i[1] < n; ++i[1])
-      for (i[0] = 0; i[0] < n; ++i[0]) {
-        Vec<D> x;
-        for (int k = 0; k < D; ++k) x[k] = (i[static_cast<std::size_t>(k)] + 0.5) * dx - 0.5;
-        p.add(s.rho0 * vol / bias, x, Vec<D>::Zero(), h, gas.internal_energy(s.rho0, s.P0));
-      }
+  examples::for_each_block_site<D>({n, n, n}, Vec<D>::Constant(-0.5), Vec<D>::Constant(dx), [&](const Vec<D>& x, auto) {
+    p.add(s.rho0 * vol / bias, x, Vec<D>::Zero(), h, gas.internal_energy(s.rho0, s.P0));
+  });
   double weight = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a)
     if (const double r = p.x[a].norm(); r < s.injection * h) weight += kernel::W<Kernel, D>(r, h);
@@ -143,6 +139,8 @@ void measure(const Sim& sim, const SedovParams& s, SedovRun& r) {
   r.L1_rho = l1 / static_cast<double>(r.r.size());
   r.time = t;
   r.radius_exact = R;
+  r.xi0 = exact.xi0();
+  r.jump = exact.density_jump();
   r.radius = shock_radius(r.r, r.rho, s.rho0);
   r.peak_density = *std::max_element(r.rho.begin(), r.rho.end());
   r.peak_exact = *std::max_element(r.rho_exact.begin(), r.rho_exact.end());
@@ -166,13 +164,10 @@ template <int D, class Kernel>
 using SphSedov =
     Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<D>>;
 
-template <int D>
-using SedovLattice = std::conditional_t<D == 3, lattice::Cubic, lattice::Square>;
-template <int D>
-using SedovCells = std::conditional_t<D == 3, geometry::LocalVoronoi3, geometry::LocalVoronoi>;
 template <int D, class Kernel, class Order>
-using SedovRegularizer = regularize::LatticeRegularizer<SedovLattice<D>, schedule::Adaptive<Kernel, D>, SedovCells<D>,
-                                                        region::Unbounded, Order>;
+using SedovRegularizer =
+    regularize::LatticeRegularizer<lattice::Cartesian<D>, schedule::Adaptive<Kernel, D>,
+                                   typename geometry::DefaultCellBuilder<D>::type, region::Unbounded, Order>;
 template <int D, class Kernel, class Order>
 using RsphSedov =
     Simulation<D, Kernel, eos::IdealGas, SedovRegularizer<D, Kernel, Order>, physics::ArtificialViscosity>;
@@ -201,7 +196,7 @@ requires(D == 2 || D == 3) RsphSedov<D, Kernel, Order> make_rsph_sedov(const Sed
   auto schedule = schedule::Adaptive<Kernel, D>::for_h_over_dx(s.h_min, s.h_max, s.dN_max, s.max_steps);
   return RsphSedov<D, Kernel, Order>(
       std::move(p), detail::sedov_box<D>(), eos::IdealGas{s.gamma},
-      SedovRegularizer<D, Kernel, Order>(SedovLattice<D>{dx}, schedule, {.remap = {s.h_over_dx}, .order = order}),
+      SedovRegularizer<D, Kernel, Order>(lattice::Cartesian<D>{dx}, schedule, {.remap = {s.h_over_dx}, .order = order}),
       sedov_time_steps(s), physics::ArtificialViscosity{s.alpha, s.beta});
 }
 

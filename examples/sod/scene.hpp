@@ -1,6 +1,7 @@
 #pragma once
 // Sod's shock tube (Sod 1978): (rho, v, P) = (1, 0, 1) left of x = 0.5 and (0.125, 0, 0.1) right,
 // gamma = 1.4, in 1D or in 2D as a strip periodic in y; reflecting walls at x = 0 and x = 1.
+#include "common/blocks.hpp"
 #include "common/levels.hpp"
 #include "common/run_helpers.hpp"
 #include "rsph/rsph.hpp"
@@ -50,18 +51,12 @@ Box<D> sod_box(double width) {
 template <int D>
 void add_sod_block(ParticleSet<D, true>& p, const analysis::GasState& state, const eos::IdealGas& gas, double x0,
                    int nx, int ny, double dx, double h_over_dx, double bias) {
-  const int nz = D == 3 ? ny : 1, nyy = D >= 2 ? ny : 1;
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < nyy; ++j)
-      for (int i = 0; i < nx; ++i) {
-        Vec<D> x;
-        x[0] = x0 + (i + 0.5) * dx;
-        if constexpr (D >= 2) x[1] = (j + 0.5) * dx;
-        if constexpr (D == 3) x[2] = (k + 0.5) * dx;
-        Vec<D> v = Vec<D>::Zero();
-        v[0] = state.v;
-        p.add(state.rho * std::pow(dx, D) / bias, x, v, h_over_dx * dx, gas.internal_energy(state.rho, state.P));
-      }
+  Vec<D> lo = Vec<D>::Zero(), v = Vec<D>::Zero();
+  lo[0] = x0;
+  v[0] = state.v;
+  examples::for_each_block_site<D>({nx, ny, ny}, lo, Vec<D>::Constant(dx), [&](const Vec<D>& x, auto) {
+    p.add(state.rho * std::pow(dx, D) / bias, x, v, h_over_dx * dx, gas.internal_energy(state.rho, state.P));
+  });
 }
 
 /// Equal-mass particles in 1D (spacing ratio 8 across the membrane); in 2D and 3D a lattice of spacing dx on
@@ -166,8 +161,9 @@ requires(D == 1 || D == 2) RsphSodSimulation<D, Kernel, Order, Extra...> make_rs
 /// regularized every `cycle` steps; masses rho Delta^3 over the lattice sum, so the SPH density of each state is
 /// its own.
 template <class Order = regularize::FirstOrder>
-using RsphSod3Regularizer = regularize::LatticeRegularizer<lattice::Cubic, schedule::EveryNSteps,
-                                                           geometry::LocalVoronoi3, region::Unbounded, Order>;
+using RsphSod3Regularizer =
+    regularize::LatticeRegularizer<lattice::Cubic, schedule::EveryNSteps,
+                                   typename geometry::DefaultCellBuilder<3>::type, region::Unbounded, Order>;
 template <class Kernel, class Order>
 using RsphSod3Simulation =
     Simulation<3, Kernel, eos::IdealGas, RsphSod3Regularizer<Order>, physics::ArtificialViscosity>;

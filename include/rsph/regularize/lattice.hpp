@@ -10,6 +10,7 @@
 #include <numbers>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <utility>
 
 namespace rsph {
@@ -310,6 +311,10 @@ struct Cubic {
   }
   static constexpr bool rectangular_cells = true;
 };
+
+/// The Cartesian lattice of each dimension: Uniform1D, Square, Cubic.
+template <int D>
+using Cartesian = std::conditional_t<D == 1, Uniform1D, std::conditional_t<D == 2, Square, Cubic>>;
 
 }  // namespace lattice
 }  // namespace rsph
