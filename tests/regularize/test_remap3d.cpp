@@ -338,8 +338,10 @@ TEST_CASE("3D second-order remap spreads a drifting pulse less than first order"
   CHECK(std::abs(grown_second) < 0.1 * grown_first);
 }
 
-TEST_CASE("3D remap with closing regions: a ball, a box and a cylindrical shell keep the gas inside, conserving",
-          "[regularize][3d]") {
+TEST_CASE(
+    "3D remap with closing regions: a ball, a box, a cylindrical shell and a flared disk keep the gas inside, "
+    "conserving",
+    "[regularize][3d]") {
   // A cloud filling each region on open axes: every old cell at the surface is cut by the region's tangent
   // plane, so no new particle sits farther outside than half a cell diagonal; both orders conserve.
   std::mt19937 rng(41);
@@ -391,5 +393,16 @@ TEST_CASE("3D remap with closing regions: a ball, a box and a cylindrical shell 
       [](const Vec<3>& x) {
         const double R = std::hypot(x.x(), x.y());
         return std::max({R - 1.0, 0.3 - R, std::abs(x.z()) - 0.45});
+      });
+  // the cones |z| = 0.6 R: the distance outside measured normal to the cone
+  check(
+      region::FlaredDisk{0.3, 1.1, 0.6},
+      [](const Vec<3>& x) {
+        const double R = std::hypot(x.x(), x.y());
+        return R > 0.3 && R < 1.1 && std::abs(x.z()) < 0.6 * R;
+      },
+      [](const Vec<3>& x) {
+        const double R = std::hypot(x.x(), x.y());
+        return std::max({R - 1.1, 0.3 - R, (std::abs(x.z()) - 0.6 * R) / std::sqrt(1.0 + 0.36)});
       });
 }

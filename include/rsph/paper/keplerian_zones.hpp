@@ -6,6 +6,7 @@
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -28,23 +29,56 @@ struct KeplerianZones {
     require(inner >= 0.0 && inner < outer, "Keplerian zones: need 0 <= inner < outer");
     require(v_factor > 0.0 && v_factor <= 1.0, "Keplerian zones: v_factor must lie in (0, 1]");
   }
-  /// Gas beyond the disk's edges is a member too: it left the disk and is the scene's to remove.
-  bool contains(const Vec<2>& x) const {
-    const double r = x.norm();
-    return r <= inner || r >= outer;
+  /// Gas beyond the disk's edges is a member too: it left the disk and is the scene's to remove. In 3D the zones
+  /// are cylindrical shells: membership goes by the distance R from the z axis.
+  template <int D>
+  bool contains(const Vec<D>& x) const {
+    const double R = cylindrical_radius(x);
+    return R <= inner || R >= outer;
   }
-  double Omega(double r) const { return v_factor * std::sqrt(GM / (r * r * r)); }
-  /// Circular velocity at x.
-  Vec<2> velocity(const Vec<2>& x) const {
-    const double r = x.norm();
-    return Omega(r) * Vec<2>(-x[1], x[0]);
+  /// Angular velocity at distance R from the axis and height z: v_factor sqrt(GM / R^3) in the plane, and above it
+  /// Omega^2 = GM / R^3 (R / r - 1 + v_factor^2), r = sqrt(R^2 + z^2): the rotation of a vertically isothermal
+  /// disk with c_s^2 ~ 1 / R (Nelson et al. 2013, eq. 13 with q = -1, whose midplane term is v_factor^2).
+  double Omega(double R, double z = 0.0) const {
+    if (z == 0.0) return v_factor * std::sqrt(GM / (R * R * R));
+    const double r = std::hypot(R, z);
+    return std::sqrt(std::max(0.0, GM / (R * R * R) * (R / r - 1.0 + v_factor * v_factor)));
   }
-  /// Turns x by Omega(r) dt about the origin and sets v to the circular velocity there.
-  void advance(Vec<2>& x, Vec<2>& v, double dt) const {
-    const double angle = Omega(x.norm()) * dt;
+  /// Circular velocity at x, about the z axis in 3D.
+  template <int D>
+  Vec<D> velocity(const Vec<D>& x) const {
+    const double w = Omega(cylindrical_radius(x), height(x));
+    Vec<D> v = Vec<D>::Zero();
+    v[0] = -w * x[1];
+    v[1] = w * x[0];
+    return v;
+  }
+  /// Turns x by Omega dt about the z axis (the origin in 2D) and sets v to the circular velocity there.
+  template <int D>
+  void advance(Vec<D>& x, Vec<D>& v, double dt) const {
+    const double angle = Omega(cylindrical_radius(x), height(x)) * dt;
     const double c = std::cos(angle), s = std::sin(angle);
-    x = Vec<2>(c * x[0] - s * x[1], s * x[0] + c * x[1]);
+    const double x0 = c * x[0] - s * x[1], x1 = s * x[0] + c * x[1];
+    x[0] = x0;
+    x[1] = x1;
     v = velocity(x);
+  }
+
+ private:
+  template <int D>
+  static double cylindrical_radius(const Vec<D>& x) {
+    static_assert(D == 2 || D == 3, "Keplerian zones are annuli of a 2D disk or cylindrical shells of a 3D one");
+    if constexpr (D == 2)
+      return x.norm();
+    else
+      return std::hypot(x[0], x[1]);
+  }
+  template <int D>
+  static double height(const Vec<D>& x) {
+    if constexpr (D == 2)
+      return 0.0;
+    else
+      return x[2];
   }
 };
 

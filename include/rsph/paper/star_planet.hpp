@@ -1,6 +1,7 @@
 #pragma once
 // §5 of the paper (after de Val-Borro et al. 2006): a star and a planet on a fixed circular orbit about
 // their common centre of mass, the planet's mass ramped in by eq. (20), its potential Plummer-softened.
+// The orbit lies in the plane z = 0: in 3D the same pull acts on gas above and below it.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 
@@ -9,6 +10,16 @@
 #include <string>
 
 namespace rsph::paper {
+
+/// A point of the orbit's plane in D dimensions: (x, y) or (x, y, 0).
+template <int D>
+Vec<D> in_dim(const Vec<2>& x) {
+  static_assert(D == 2 || D == 3, "the star and planet orbit in the plane z = 0 of a 2D or 3D disk");
+  if constexpr (D == 2)
+    return x;
+  else
+    return Vec<3>(x.x(), x.y(), 0.0);
+}
 
 struct StarAndPlanet {
   double M_star = 1.0;
@@ -50,9 +61,11 @@ struct StarAndPlanet {
   struct AtTime {
     Vec<2> star, planet;
     double M_star, M_planet, eps2;
-    /// Point-mass gravity of the star plus the softened planet.
-    Vec<2> acceleration(const Vec<2>& x) const {
-      const Vec<2> d_s = x - star, d_p = x - planet;
+    /// Point-mass gravity of the star plus the softened planet at x, a point in the plane (D = 2) or in space
+    /// (D = 3), or an expression of one.
+    template <class X, int D = X::RowsAtCompileTime>
+    Vec<D> acceleration(const Eigen::MatrixBase<X>& x) const {
+      const Vec<D> d_s = x - in_dim<D>(star), d_p = x - in_dim<D>(planet);
       const double r2_s = d_s.squaredNorm();
       const double r2_p = d_p.squaredNorm() + eps2;
       return (-M_star / (r2_s * std::sqrt(r2_s))) * d_s + (-M_planet / (r2_p * std::sqrt(r2_p))) * d_p;
@@ -62,7 +75,10 @@ struct StarAndPlanet {
     const double eps = softening * a;
     return {star_position(t), planet_position(t), M_star, planet_mass_at(t), eps * eps};
   }
-  Vec<2> acceleration(const Vec<2>& x, double t) const { return at(t).acceleration(x); }
+  template <class X, int D = X::RowsAtCompileTime>
+  Vec<D> acceleration(const Eigen::MatrixBase<X>& x, double t) const {
+    return at(t).acceleration(x);
+  }
 };
 
 }  // namespace rsph::paper

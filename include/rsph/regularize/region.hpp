@@ -115,6 +115,32 @@ struct CylindricalShell {
   }
 };
 
+/// A flared disk (3D): r_in <= R <= r_out and |z| <= slope R, R = sqrt(x^2 + y^2), the gas of a disk whose
+/// scale height grows as R (a vertically isothermal disk of fixed H / R, slope a few H / R). Each cell is cut
+/// by the tangent planes of both cylinders at its particle's azimuth and by the planes of the two cones through
+/// the particle's azimuth, which touch the cones along the whole line and are exact there.
+struct FlaredDisk {
+  static constexpr bool clips = true;
+  double r_in = 0.0, r_out = 1.0, slope = 0.15;
+
+  void validate() const {
+    require(r_in >= 0.0 && r_out > r_in && slope > 0.0, "flared disk region: need 0 <= r_in < r_out and slope > 0");
+  }
+  void clip(const Vec<3>& x_o, geometry::ConvexPolyhedron*& cell, geometry::ConvexPolyhedron*& scratch) const {
+    const double R_o = std::hypot(x_o.x(), x_o.y());
+    if (R_o <= 0.0) return;
+    const Vec<3> e_R(x_o.x() / R_o, x_o.y() / R_o, 0.0);
+    detail::keep_within(cell, scratch, e_R, std::max(r_out, R_o) - R_o);
+    if (r_in > 0.0) detail::keep_within(cell, scratch, -e_R, R_o - std::min(r_in, R_o));
+    // z <= slope R and -z <= slope R: the unit normals (-slope e_R +- e_z) / sqrt(1 + slope^2) through the axis
+    const double norm = std::sqrt(1.0 + slope * slope);
+    for (const double side : {1.0, -1.0}) {
+      const Vec<3> n = (side * Vec<3>::UnitZ() - slope * e_R) / norm;
+      detail::keep_within(cell, scratch, n, std::max(0.0, -n.dot(x_o)));
+    }
+  }
+};
+
 }  // namespace rsph::region
 
 namespace rsph {
