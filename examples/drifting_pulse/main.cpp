@@ -23,12 +23,13 @@ struct Options {
   std::string shifts_text = "0.01,0.1,0.5,1.0";
   std::string counts_text = "0,100,200,300,400";
   int dim = 1;
+  std::string kernel = "cubic";
 };
 
 /// The options from the command line, or none when --help was asked for.
 std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
-  auto& [base, common, shifts_text, counts_text, dim] = opt;
+  auto& [base, common, shifts_text, counts_text, dim, kernel] = opt;
   ex::po::options_description desc("rsph-drifting-pulse options");
   ex::Flags flag(desc, common);
   ex::add_common_options(flag, common, "--counts 0,10,20,30,40; in 3D --cells 16");
@@ -39,6 +40,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("pulse-width", base.pulse_width, "pulse width in spacings");
   flag("contrast", base.contrast, "pulse density over the background");
   flag("h-over-dx", base.h_over_dx, "h / Delta");
+  flag("kernel", kernel, ex::kernel_names);
   ex::add_remap_flag(flag, base.remap);
   ex::po::variables_map vm;
   if (!ex::parse(
@@ -47,6 +49,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
           "Usage: rsph-drifting-pulse [--dim 1|2|3] [--shifts 0.01,0.1,0.5,1.0] [--counts 0,100,...] [--out DIR]"))
     return std::nullopt;
   if (dim < 1 || dim > 3) throw InputError("--dim must be 1, 2 or 3 (got " + std::to_string(dim) + ")");
+  ex::check_kernel(kernel);
   if (vm["cells"].defaulted()) base.cells = dim == 1 ? 128 : (dim == 2 ? 64 : 32);
   if (ex::quick_preset(common)) {
     if (vm["counts"].defaulted()) counts_text = "0,10,20,30,40";
@@ -75,11 +78,11 @@ struct PulseRun {
 };
 
 /// One shift: the pulse regularized through every count, its profile, snapshot and widths at each.
-template <int D>
+template <int D, class Kernel>
 void run_case(scenes::DriftingPulseParams s, const std::vector<int>& counts, const std::filesystem::path& dir,
               ex::Checkpoints& checkpoints, PulseRun& run) {
   ex::with_remap(s.remap, [&](auto order) {
-    auto sim = scenes::make_drifting_pulse<D>(s, order);
+    auto sim = scenes::make_drifting_pulse<D, Kernel>(s, order);
     const double m0 = sim.totals().mass;
     const auto case_dir = dir / ("shift_" + shift_tag(s.shift));
     io::ensure_directory(case_dir);
@@ -129,9 +132,9 @@ std::vector<std::string> width_columns(int dim) {
   return c;
 }
 
-template <int D>
+template <int D, class Kernel>
 int run_dim(Options opt) {
-  auto& [base, common, shifts_text, counts_text, dim] = opt;
+  auto& [base, common, shifts_text, counts_text, dim, kernel] = opt;
   const auto shifts = ex::parse_numbers(shifts_text, "--shifts");
   std::vector<int> counts;
   for (double c : ex::parse_numbers(counts_text, "--counts")) {
@@ -144,7 +147,7 @@ int run_dim(Options opt) {
   const auto wall0 = std::chrono::steady_clock::now();
   io::Json summary, cases;
   summary.set("test", "drifting_pulse").set("cells", base.cells).set("h_over_dx", base.h_over_dx);
-  summary.set("remap", base.remap);
+  summary.set("remap", base.remap).set("kernel", kernel);
   if (D > 1) summary.set("dim", D);
   PulseRun run{io::CsvWriter(dir / "widths.csv", width_columns(D)), {}, 0, 0, 0.0};
   ex::Checkpoints checkpoints(common, dir, "rsph-drifting-pulse");
@@ -166,7 +169,7 @@ int run_dim(Options opt) {
   for (std::size_t i = resumed_case > 0 ? resumed_case - 1 : 0; i < shifts.size(); ++i) {
     auto s = base;
     s.shift = shifts[i];
-    run_case<D>(s, counts, dir, checkpoints, run);
+    run_case<D, Kernel>(s, counts, dir, checkpoints, run);
   }
   for (std::size_t i = 0; i < shifts.size(); ++i) {
     io::Json width_json, c;
@@ -199,9 +202,12 @@ int run_dim(Options opt) {
 
 int run(Options opt) {
   ex::apply_threads(opt.common.threads);
-  if (opt.dim == 3) return run_dim<3>(std::move(opt));
-  if (opt.dim == 2) return run_dim<2>(std::move(opt));
-  return run_dim<1>(std::move(opt));
+  return ex::with_kernel(opt.kernel, [&](auto k) {
+    using Kernel = decltype(k);
+    if (opt.dim == 3) return run_dim<3, Kernel>(std::move(opt));
+    if (opt.dim == 2) return run_dim<2, Kernel>(std::move(opt));
+    return run_dim<1, Kernel>(std::move(opt));
+  });
 }
 
 }  // namespace

@@ -21,12 +21,13 @@ struct Options {
   ex::CommonOptions common;
   std::string method = "rsph";
   int dim = 2;
+  std::string kernel = "cubic";
 };
 
 /// The options from the command line, or none when --help was asked for.
 std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
-  auto& [s, common, method, dim] = opt;
+  auto& [s, common, method, dim, kernel] = opt;
   ex::po::options_description desc("rsph-kelvin-helmholtz options");
   ex::Flags flag(desc, common);
   ex::add_common_options(flag, common, "--cells 64");
@@ -36,6 +37,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("conductivity", s.alpha_u, "artificial conductivity alpha_u (0: off)");
   flag("cells", s.cells, "1 / Delta");
   flag("h-over-dx", s.h_over_dx, "h / Delta (SPH: eta)");
+  flag("kernel", kernel, ex::kernel_names);
   flag("reg-steps", s.reg_steps, "RSPH: steps between regularizations");
   ex::add_remap_flag(flag, s.remap);
   flag("t-end", s.t_end, "end time (0: tau_KH = 0.58)");
@@ -54,14 +56,15 @@ std::optional<Options> parse_options(int argc, char** argv) {
   }
   if (method != "rsph" && method != "sph") throw InputError("unknown method '" + method + "' (rsph, sph)");
   if (dim != 2 && dim != 3) throw InputError("--dim must be 2 or 3 (got " + std::to_string(dim) + ")");
+  ex::check_kernel(kernel);
   s.validate();
   ex::record_run(common, argc, argv);
   return opt;
 }
 
-template <int D>
+template <int D, class Kernel>
 int run_dim(Options opt) {
-  auto& [s, common, method, dim] = opt;
+  auto& [s, common, method, dim, kernel] = opt;
   const auto dir = ex::prepare_output(common);
   io::Progress progress("rsph-kelvin-helmholtz " + method, s.end_time());
   auto on_step = [&](const auto& sim) {
@@ -74,12 +77,13 @@ int run_dim(Options opt) {
   };
   {
     // the initial state, for the record
-    const auto p0 = method == "rsph" ? scenes::kh_lattice<D>(s, s.h_over_dx) : scenes::kh_equal_mass<D>(s);
+    const auto p0 =
+        method == "rsph" ? scenes::kh_lattice<D, Kernel>(s, s.h_over_dx) : scenes::kh_equal_mass<D, Kernel>(s);
     io::write_snapshot(dir / io::snapshot_name(0), p0, 0.0, 0,
                        io::describe_run(s.box<D>(), eos::IdealGas{s.gamma}, "dimensionless code units"));
   }
   ex::Checkpoints checkpoints(common, dir, "rsph-kelvin-helmholtz");
-  const auto r = scenes::run_kelvin_helmholtz<D>(method == "rsph", s, on_step, on_end, &checkpoints);
+  const auto r = scenes::run_kelvin_helmholtz<D, Kernel>(method == "rsph", s, on_step, on_end, &checkpoints);
   progress.finish();
   io::CsvWriter csv(dir / "amplitude.csv", {"time", "amplitude"});
   for (std::size_t i = 0; i < r.t.size(); ++i) csv.row({r.t[i], r.amplitude[i]});
@@ -88,7 +92,11 @@ int run_dim(Options opt) {
   for (std::size_t i = 0; i < r.t.size(); ++i) layer.row({r.t[i], r.thickness[i]});
   layer.close();
   io::Json summary;
-  summary.set("test", "kelvin_helmholtz").set("method", method).set("alpha_u", s.alpha_u).set("cells", s.cells);
+  summary.set("test", "kelvin_helmholtz")
+      .set("method", method)
+      .set("kernel", kernel)
+      .set("alpha_u", s.alpha_u)
+      .set("cells", s.cells);
   summary.set("h_over_dx", s.h_over_dx).set("courant", s.courant).set("wavelengths", s.wavelengths);
   summary.set("density_ratio", s.chi).set("seed_amplitude", s.A);
   if (D == 3) summary.set("dim", D).set("depth", s.depth);
@@ -124,7 +132,10 @@ int run_dim(Options opt) {
 
 int run(Options opt) {
   ex::apply_threads(opt.common.threads);
-  return opt.dim == 3 ? run_dim<3>(std::move(opt)) : run_dim<2>(std::move(opt));
+  return ex::with_kernel(opt.kernel, [&](auto k) {
+    using Kernel = decltype(k);
+    return opt.dim == 3 ? run_dim<3, Kernel>(std::move(opt)) : run_dim<2, Kernel>(std::move(opt));
+  });
 }
 
 }  // namespace

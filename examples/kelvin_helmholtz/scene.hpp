@@ -115,12 +115,12 @@ double momentum_thickness(const P& p, const KelvinHelmholtzParams& s) {
 }
 
 /// RSPH: a square (cubic) lattice; masses give rho through the lattice sum.
-template <int D = 2>
+template <int D = 2, class Kernel = kernel::CubicSpline>
 ParticleSet<D, true> kh_lattice(const KelvinHelmholtzParams& s, double h_over_dx) {
   s.validate();
   const double dx = 1.0 / s.cells;
   const eos::IdealGas gas{s.gamma};
-  const double bias = kernel::lattice_sum<kernel::CubicSpline, D>(h_over_dx);
+  const double bias = kernel::lattice_sum<Kernel, D>(h_over_dx);
   ParticleSet<D, true> p;
   Vec<D> lo = Vec<D>::Zero();
   lo[0] = -0.5;
@@ -135,7 +135,7 @@ ParticleSet<D, true> kh_lattice(const KelvinHelmholtzParams& s, double h_over_dx
 
 /// Plain SPH: equal masses, spacing Delta below and Delta / chi^(1/D) above (rounded to tile the box; in 3D
 /// along z too).
-template <int D = 2>
+template <int D = 2, class Kernel = kernel::CubicSpline>
 ParticleSet<D, true> kh_equal_mass(const KelvinHelmholtzParams& s) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
@@ -146,7 +146,7 @@ ParticleSet<D, true> kh_equal_mass(const KelvinHelmholtzParams& s) {
     const int ny = std::max(1, static_cast<int>(std::lround((y1 - y0) / dx)));
     const int nz = D == 3 ? std::max(1, static_cast<int>(std::lround(size[D - 1] / dx))) : 1;
     const double dy = (y1 - y0) / ny, dz = D == 3 ? size[D - 1] / nz : 1.0;
-    const double bias = kernel::lattice_sum<kernel::CubicSpline, D>(s.h_over_dx);
+    const double bias = kernel::lattice_sum<Kernel, D>(s.h_over_dx);
     const double vol = dx * dy * dz;
     Vec<D> lo = Vec<D>::Zero(), spacing = Vec<D>::Constant(dz);
     lo[0] = -0.5;
@@ -248,20 +248,15 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
 }
 
 /// The scene's methods: RSPH on the square (cubic) lattice, regularized every reg_steps, and grad-h SPH with
-/// equal masses; each with Price's conductivity or without.
-using KhKernel = kernel::CubicSpline;
+/// equal masses; each with Price's conductivity or without, with any kernel (the cubic spline by default).
 template <class Order = regularize::FirstOrder, int D = 2>
 using KhRegularizer =
     regularize::LatticeRegularizer<lattice::Cartesian<D>, schedule::EveryNSteps,
                                    typename geometry::DefaultCellBuilder<D>::type, region::Unbounded, Order>;
-template <class Order, class... Terms>
-using RsphKh = Simulation<2, KhKernel, eos::IdealGas, KhRegularizer<Order>, Terms...>;
-template <class Order, class... Terms>
-using RsphKh3 = Simulation<3, KhKernel, eos::IdealGas, KhRegularizer<Order, 3>, Terms...>;
-template <int D, class... Terms>
-using SphKhD = Simulation<D, KhKernel, eos::IdealGas, regularize::None, physics::GradH<D>, Terms...>;
-template <class... Terms>
-using SphKh = SphKhD<2, Terms...>;
+template <int D, class Kernel, class Order, class... Terms>
+using RsphKh = Simulation<D, Kernel, eos::IdealGas, KhRegularizer<Order, D>, Terms...>;
+template <int D, class Kernel, class... Terms>
+using SphKh = Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::GradH<D>, Terms...>;
 
 inline TimeStepParams kh_time_steps(const KelvinHelmholtzParams& s) {
   TimeStepParams ts;
@@ -269,33 +264,33 @@ inline TimeStepParams kh_time_steps(const KelvinHelmholtzParams& s) {
   return ts;
 }
 
-template <int D = 2, class Order, class... Terms>
-auto make_rsph_kh(const KelvinHelmholtzParams& s, Order order, Terms... terms) {
-  using Sim = Simulation<D, KhKernel, eos::IdealGas, KhRegularizer<Order, D>, Terms...>;
-  return Sim(kh_lattice<D>(s, s.h_over_dx), s.box<D>(), eos::IdealGas{s.gamma},
-             KhRegularizer<Order, D>(lattice::Cartesian<D>{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
-                                     {.remap = {s.h_over_dx}, .order = order}),
-             kh_time_steps(s), terms...);
+template <int D = 2, class Kernel = kernel::CubicSpline, class Order, class... Terms>
+RsphKh<D, Kernel, Order, Terms...> make_rsph_kh(const KelvinHelmholtzParams& s, Order order, Terms... terms) {
+  return RsphKh<D, Kernel, Order, Terms...>(
+      kh_lattice<D, Kernel>(s, s.h_over_dx), s.box<D>(), eos::IdealGas{s.gamma},
+      KhRegularizer<Order, D>(lattice::Cartesian<D>{1.0 / s.cells}, schedule::EveryNSteps{s.reg_steps},
+                              {.remap = {s.h_over_dx}, .order = order}),
+      kh_time_steps(s), terms...);
 }
 
-template <int D = 2, class... Terms>
-SphKhD<D, Terms...> make_sph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
-  return SphKhD<D, Terms...>(kh_equal_mass<D>(s), s.box<D>(), eos::IdealGas{s.gamma}, regularize::None{},
-                             kh_time_steps(s), physics::GradH<D>{s.h_over_dx}, terms...);
+template <int D = 2, class Kernel = kernel::CubicSpline, class... Terms>
+SphKh<D, Kernel, Terms...> make_sph_kh(const KelvinHelmholtzParams& s, Terms... terms) {
+  return SphKh<D, Kernel, Terms...>(kh_equal_mass<D, Kernel>(s), s.box<D>(), eos::IdealGas{s.gamma}, regularize::None{},
+                                    kh_time_steps(s), physics::GradH<D>{s.h_over_dx}, terms...);
 }
 
 /// Runs one of the variants: RSPH (with either remap) or SPH, with conductivity when alpha_u > 0; with
 /// checkpoints, as they say.
-template <int D = 2, class OnStep, class OnEnd>
+template <int D = 2, class Kernel = kernel::CubicSpline, class OnStep, class OnEnd>
 KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end,
                            examples::Checkpoints* checkpoints = nullptr) {
   auto run = [&](auto sim) { return run_kh(sim, s, on_step, on_end, checkpoints); };
   const physics::ArtificialConductivity conduct{s.alpha_u};
   if (rsph)
     return examples::with_remap(s.remap, [&](auto order) {
-      return s.alpha_u > 0 ? run(make_rsph_kh<D>(s, order, conduct)) : run(make_rsph_kh<D>(s, order));
+      return s.alpha_u > 0 ? run(make_rsph_kh<D, Kernel>(s, order, conduct)) : run(make_rsph_kh<D, Kernel>(s, order));
     });
-  return s.alpha_u > 0 ? run(make_sph_kh<D>(s, conduct)) : run(make_sph_kh<D>(s));
+  return s.alpha_u > 0 ? run(make_sph_kh<D, Kernel>(s, conduct)) : run(make_sph_kh<D, Kernel>(s));
 }
 
 }  // namespace rsph::scenes

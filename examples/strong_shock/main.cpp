@@ -20,12 +20,13 @@ struct Options {
   scenes::StrongShockParams s;
   ex::CommonOptions common;
   std::string method = "rsph";
+  std::string kernel = "cubic";
 };
 
 /// The options from the command line, or none when --help was asked for.
 std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
-  auto& [s, common, method] = opt;
+  auto& [s, common, method, kernel] = opt;
   ex::po::options_description desc("rsph-strong-shock options");
   ex::Flags flag(desc, common);
   ex::add_common_options(flag, common,
@@ -43,6 +44,7 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("sph-right", s.sph_nx_right, "SPH: particles along x, right half");
   flag("sph-right-rows", s.sph_ny_right, "SPH: rows, right half");
   flag("eta", s.eta, "SPH: h = eta (m / rho)^(1/2)");
+  flag("kernel", kernel, ex::kernel_names);
   flag("t-end", s.t_end, "end time");
   flag("courant", s.courant, "Courant factor");
   ex::add_level_options(flag, s.refinement, "RSPH",
@@ -66,13 +68,14 @@ std::optional<Options> parse_options(int argc, char** argv) {
     if (vm["sph-right-rows"].defaulted()) s.sph_ny_right = 2;
   }
   if (method != "rsph" && method != "sph") throw InputError("unknown method '" + method + "' (rsph, sph)");
+  ex::check_kernel(kernel);
   s.validate();
   ex::record_run(common, argc, argv);
   return opt;
 }
 
 int run(Options opt) {
-  auto& [s, common, method] = opt;
+  auto& [s, common, method, kernel] = opt;
   ex::apply_threads(common.threads);
   const auto dir = ex::prepare_output(common);
   io::Progress progress("rsph-strong-shock " + method, s.t_end);
@@ -85,17 +88,19 @@ int run(Options opt) {
     ex::write_scheme(scheme, sim);
   };
   ex::Checkpoints checkpoints(common, dir, "rsph-strong-shock");
-  scenes::ShockRun r;
-  if (method == "rsph" && s.refinement.levels > 0)
-    r = ex::with_remap(s.remap, [&](auto order) {
-      return scenes::run_shock(scenes::make_rsph_levels_shock(s, order), s, on_step, on_end, &checkpoints);
-    });
-  else if (method == "rsph")
-    r = ex::with_remap(s.remap, [&](auto order) {
-      return scenes::run_shock(scenes::make_rsph_shock(s, order), s, on_step, on_end, &checkpoints);
-    });
-  else  // sph (parse_options refused the rest)
-    r = scenes::run_shock(scenes::make_sph_shock(s), s, on_step, on_end, &checkpoints);
+  const auto r = ex::with_kernel(kernel, [&](auto k) {
+    using Kernel = decltype(k);
+    if (method == "rsph" && s.refinement.levels > 0)
+      return ex::with_remap(s.remap, [&](auto order) {
+        return scenes::run_shock(scenes::make_rsph_levels_shock<Kernel>(s, order), s, on_step, on_end, &checkpoints);
+      });
+    if (method == "rsph")
+      return ex::with_remap(s.remap, [&](auto order) {
+        return scenes::run_shock(scenes::make_rsph_shock<Kernel>(s, order), s, on_step, on_end, &checkpoints);
+      });
+    // sph (parse_options refused the rest)
+    return scenes::run_shock(scenes::make_sph_shock<Kernel>(s), s, on_step, on_end, &checkpoints);
+  });
   progress.finish();
 
   io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});
@@ -110,7 +115,8 @@ int run(Options opt) {
   }
   ex_csv.close();
   io::Json summary;
-  summary.set("test", "strong_shock").set("method", method).set("alpha", s.alpha).set("beta", s.beta);
+  summary.set("test", "strong_shock").set("method", method).set("kernel", kernel);
+  summary.set("alpha", s.alpha).set("beta", s.beta);
   summary.set("particles", r.particles_final);
   summary.set("L1_rho", r.errors.L1_rho).set("L1_v", r.errors.L1_v).set("L1_P", r.errors.L1_P);
   summary.set("shock_position", r.shock_position).set("shock_position_exact", r.shock_position_exact);

@@ -130,22 +130,22 @@ void measure(const Sim& sim, const StrongShockParams& s, ShockRun& r) {
 
 }  // namespace detail
 
-template <class Order = regularize::FirstOrder>
-using ShockRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<kernel::CubicSpline, 2>,
+template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
+using ShockRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<Kernel, 2>,
                                                         geometry::LocalVoronoi, region::Unbounded, Order>;
-template <class Order = regularize::FirstOrder>
-using RsphShock =
-    Simulation<2, kernel::CubicSpline, eos::IdealGas, ShockRegularizer<Order>, physics::ArtificialViscosity>;
-using SphShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, regularize::None, physics::ArtificialViscosity,
-                            physics::GradH<2>>;
+template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
+using RsphShock = Simulation<2, Kernel, eos::IdealGas, ShockRegularizer<Order, Kernel>, physics::ArtificialViscosity>;
+template <class Kernel = kernel::CubicSpline>
+using SphShock =
+    Simulation<2, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<2>>;
 
-template <class Order = regularize::FirstOrder>
-RsphShock<Order> make_rsph_shock(const StrongShockParams& s, Order order = {}) {
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
+RsphShock<Order, Kernel> make_rsph_shock(const StrongShockParams& s, Order order = {}) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   const double dx = 1.0 / s.nx;
   ParticleSet<2, true> p;
-  const double sum = kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx);
+  const double sum = kernel::lattice_sum<Kernel, 2>(s.h_over_dx);
   detail::add_block(p, s.left, gas, 0.0, s.nx / 2, s.ny, dx, s.h_over_dx, sum);
   detail::add_block(p, s.right, gas, 0.5, s.nx - s.nx / 2, s.ny, dx, s.h_over_dx, sum);
   Box<2> box;
@@ -153,28 +153,28 @@ RsphShock<Order> make_rsph_shock(const StrongShockParams& s, Order order = {}) {
   box.edge = {Edge::reflecting, Edge::periodic};
   TimeStepParams ts;
   ts.courant = s.courant;
-  return RsphShock<Order>(
+  return RsphShock<Order, Kernel>(
       std::move(p), box, gas,
-      ShockRegularizer<Order>(lattice::Square{dx},
-                              schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
-                              {.remap = {s.h_over_dx}, .order = order}),
+      ShockRegularizer<Order, Kernel>(lattice::Square{dx},
+                                      schedule::Adaptive<Kernel, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
+                                      {.remap = {s.h_over_dx}, .order = order}),
       ts, physics::ArtificialViscosity{s.alpha, s.beta});
 }
 
 /// RSPH on levels in factors of two (the paper's variable, time-dependent resolution), the density-jump
 /// criterion choosing the levels at every regularization, with consistent gradients at the level faces.
 using ShockLevels = lattice::MultiLevel<2, refine::DensityJump>;
-template <class Order = regularize::FirstOrder>
-using LevelShockRegularizer = regularize::LatticeRegularizer<ShockLevels, schedule::Adaptive<kernel::CubicSpline, 2>,
+template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
+using LevelShockRegularizer = regularize::LatticeRegularizer<ShockLevels, schedule::Adaptive<Kernel, 2>,
                                                              geometry::LocalVoronoi, region::Unbounded, Order>;
-template <class Order = regularize::FirstOrder>
-using RsphLevelShock = Simulation<2, kernel::CubicSpline, eos::IdealGas, LevelShockRegularizer<Order>,
+template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
+using RsphLevelShock = Simulation<2, Kernel, eos::IdealGas, LevelShockRegularizer<Order, Kernel>,
                                   physics::ArtificialViscosity, physics::ConsistentGradient>;
 
 /// The tube on the finest lattice, then one remap onto the level lattice: the membrane on the finest
 /// level, the uniform states on level 0; rho = m / V, as the continuity equation takes it.
-template <class Order = regularize::FirstOrder>
-RsphLevelShock<Order> make_rsph_levels_shock(const StrongShockParams& s, Order order = {}) {
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
+RsphLevelShock<Order, Kernel> make_rsph_levels_shock(const StrongShockParams& s, Order order = {}) {
   s.validate();
   require(s.refinement.levels > 0, "strong shock: the level lattice needs --levels >= 1");
   const eos::IdealGas gas{s.gamma};
@@ -189,19 +189,20 @@ RsphLevelShock<Order> make_rsph_levels_shock(const StrongShockParams& s, Order o
   auto ml = examples::start_on_levels(p, box, dx, s.refinement, remap);
   TimeStepParams ts;
   ts.courant = s.courant;
-  return RsphLevelShock<Order>(
+  return RsphLevelShock<Order, Kernel>(
       std::move(p), box, gas,
-      LevelShockRegularizer<Order>(std::move(ml),
-                                   schedule::Adaptive<kernel::CubicSpline, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
-                                   {.remap = remap, .order = order}),
+      LevelShockRegularizer<Order, Kernel>(std::move(ml),
+                                           schedule::Adaptive<Kernel, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
+                                           {.remap = remap, .order = order}),
       ts, physics::ArtificialViscosity{s.alpha, s.beta}, physics::ConsistentGradient{});
 }
 
-inline SphShock make_sph_shock(const StrongShockParams& s) {
+template <class Kernel = kernel::CubicSpline>
+SphShock<Kernel> make_sph_shock(const StrongShockParams& s) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   ParticleSet<2, true> p;
-  const double sum = kernel::lattice_sum<kernel::CubicSpline, 2>(s.eta);
+  const double sum = kernel::lattice_sum<Kernel, 2>(s.eta);
   detail::add_block(p, s.left, gas, 0.0, s.sph_nx_left, s.sph_ny_left, 0.5 / s.sph_nx_left, s.eta, sum);
   detail::add_block(p, s.right, gas, 0.5, s.sph_nx_right, s.sph_ny_right, 0.5 / s.sph_nx_right, s.eta, sum);
   Box<2> box;
@@ -209,8 +210,8 @@ inline SphShock make_sph_shock(const StrongShockParams& s) {
   box.edge = {Edge::reflecting, Edge::periodic};
   TimeStepParams ts;
   ts.courant = s.courant;
-  return SphShock(std::move(p), box, gas, regularize::None{}, ts, physics::ArtificialViscosity{s.alpha, s.beta},
-                  physics::GradH<2>{s.eta});
+  return SphShock<Kernel>(std::move(p), box, gas, regularize::None{}, ts, physics::ArtificialViscosity{s.alpha, s.beta},
+                          physics::GradH<2>{s.eta});
 }
 
 /// Runs any of the simulations to t_end (examples::run_stops); on_step(sim) after each step, on_end(sim) once

@@ -23,18 +23,20 @@ struct Options {
   scenes::ViscousRingParams s;
   ex::CommonOptions common;
   std::string taus = "0.054,0.090,0.126,0.162,0.198";
+  std::string kernel = "cubic";
 };
 
 /// The options from the command line, or none when --help was asked for.
 std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
-  auto& [s, common, taus] = opt;
+  auto& [s, common, taus, kernel] = opt;
   ex::po::options_description desc("rsph-viscous-ring options");
   ex::Flags flag(desc, common);
   ex::add_common_options(flag, common, "--nu 4.8e-4 --h 0.04 --bin-width 0.02");
   flag("nu", s.nu, "prescribed kinematic viscosity nu_s");
   flag("h", s.h, "smoothing length (R_0)");
   flag("h-over-dx", s.h_over_dx, "h / Delta");
+  flag("kernel", kernel, ex::kernel_names);
   flag("cycle", s.cycle, "regularization cycle c_r in units of --cycle-unit steps (0: never regularize)");
   ex::add_remap_flag(flag, s.remap);
   flag("cycle-unit", s.cycle_unit, "steps per unit of c_r");
@@ -63,12 +65,13 @@ std::optional<Options> parse_options(int argc, char** argv) {
   }
   s.taus = ex::parse_numbers(taus, "--taus");
   s.validate();
+  ex::check_kernel(kernel);
   ex::record_run(common, argc, argv);
   return opt;
 }
 
 int run(Options opt) {
-  auto& [s, common, taus] = opt;
+  auto& [s, common, taus, kernel] = opt;
   ex::apply_threads(common.threads);
   const auto dir = ex::prepare_output(common);
   const double t_end = s.time_of(s.taus.back());
@@ -85,7 +88,8 @@ int run(Options opt) {
   };
   ex::Checkpoints checkpoints(common, dir, "rsph-viscous-ring");
   const auto part = checkpoints.add("program", [&](io::Archive& ar) { conservation.checkpoint(ar); });
-  const auto r = scenes::run_viscous_ring(s, on_step, on_snapshot, &checkpoints);
+  const auto r = ex::with_kernel(
+      kernel, [&](auto k) { return scenes::run_viscous_ring<decltype(k)>(s, on_step, on_snapshot, &checkpoints); });
   progress.finish();
   conservation.close();
 
@@ -113,7 +117,11 @@ int run(Options opt) {
   table.close();
 
   io::Json summary;
-  summary.set("test", "viscous_ring").set("viscosity", s.viscosity).set("nu_s", s.nu).set("h", s.h);
+  summary.set("test", "viscous_ring")
+      .set("kernel", kernel)
+      .set("viscosity", s.viscosity)
+      .set("nu_s", s.nu)
+      .set("h", s.h);
   summary.set("h_over_dx", s.h_over_dx).set("cycle", s.cycle).set("cycle_unit", s.cycle_unit);
   summary.set("max_bin", s.max_bin).set("lattice", s.lattice);
   if (s.cycle > 0) summary.set("remap", s.remap);

@@ -81,12 +81,12 @@ struct ViscousRingParams {
 /// Lattice sites inside the annulus; masses from eq. (16) times the cell area over the kernel's lattice sum,
 /// so rho = Sigma. A hexagonal lattice of the same Delta (nearest-neighbour distance) holds 2/sqrt(3) times
 /// the sites.
-template <class Lattice>
+template <class Kernel = kernel::CubicSpline, class Lattice>
 ParticleSet<2, false> ring_particles_on(const ViscousRingParams& s, const Lattice& lat) {
   s.validate();
   const auto ring = s.ring();
   const auto [x_in, x_out] = s.annulus();
-  const double bias = examples::lattice_bias<kernel::CubicSpline, Lattice>(s.h_over_dx);
+  const double bias = examples::lattice_bias<Kernel, Lattice>(s.h_over_dx);
   ParticleSet<2, false> p;
   examples::for_each_site_in_annulus(lat, s.box(), x_in, x_out, [&](const Vec<2>& x, double area) {
     const double R = x.norm();
@@ -242,16 +242,16 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
 }  // namespace detail
 
 /// The scene's methods: RSPH regularized every c_r cycles on a square, hexagonal or rings lattice, and plain SPH
-/// (c_r = 0), each with Monaghan-Gingold or Navier-Stokes viscosity, about a point-mass star.
-using RingKernel = kernel::CubicSpline;
+/// (c_r = 0), each with Monaghan-Gingold or Navier-Stokes viscosity, about a point-mass star; with any kernel
+/// (the cubic spline by default).
 template <class Lattice, class Order = regularize::FirstOrder>
 using RingRegularizer =
     regularize::LatticeRegularizer<Lattice, schedule::EveryNSteps, geometry::LocalVoronoi, region::Unbounded, Order>;
-template <class Lattice, class Viscosity, class Order = regularize::FirstOrder>
+template <class Lattice, class Viscosity, class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
 using RsphRing =
-    Simulation<2, RingKernel, eos::Pressureless, RingRegularizer<Lattice, Order>, Viscosity, physics::PointMass<2>>;
-template <class Viscosity>
-using SphRing = Simulation<2, RingKernel, eos::Pressureless, regularize::None, Viscosity, physics::PointMass<2>>;
+    Simulation<2, Kernel, eos::Pressureless, RingRegularizer<Lattice, Order>, Viscosity, physics::PointMass<2>>;
+template <class Viscosity, class Kernel = kernel::CubicSpline>
+using SphRing = Simulation<2, Kernel, eos::Pressureless, regularize::None, Viscosity, physics::PointMass<2>>;
 
 /// The time-step parameters; individual steps only with the MG viscosity (a stress term needs one step).
 template <class Viscosity>
@@ -275,49 +275,54 @@ Viscosity ring_viscosity(const ViscousRingParams& s) {
     return Viscosity::on_square_lattice(s.nu, s.h_over_dx);
 }
 
-template <class Viscosity, class Lattice, class Order = regularize::FirstOrder>
-RsphRing<Lattice, Viscosity, Order> make_rsph_ring(const ViscousRingParams& s, const Lattice& lat, Order order = {}) {
+template <class Viscosity, class Kernel = kernel::CubicSpline, class Lattice, class Order = regularize::FirstOrder>
+RsphRing<Lattice, Viscosity, Order, Kernel> make_rsph_ring(const ViscousRingParams& s, const Lattice& lat,
+                                                           Order order = {}) {
   // Open edges: an edge cell closed at 0.75 Delta has about one lattice cell's area, and a new cell
   // less than half covered hands its share to its neighbour, so the edge follows the gas rather
   // than creeping outwards by a closing radius at every regularization; cells with less than 1e-6 of
   // the largest mass join their neighbours, so the far tails (Sigma ~ 1e-6 of its peak) cost nothing.
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-  return RsphRing<Lattice, Viscosity, Order>(
-      ring_particles_on(s, lat), s.box(), {},
+  return RsphRing<Lattice, Viscosity, Order, Kernel>(
+      ring_particles_on<Kernel>(s, lat), s.box(), {},
       RingRegularizer<Lattice, Order>(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit},
                                       {.remap = remap, .order = order}),
       ring_time_steps<Viscosity>(s), ring_viscosity<Viscosity, Lattice>(s),
       physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
 }
 
-template <class Viscosity, class Lattice>
-SphRing<Viscosity> make_sph_ring(const ViscousRingParams& s, const Lattice& lat) {
-  return SphRing<Viscosity>(ring_particles_on(s, lat), s.box(), {}, {}, ring_time_steps<Viscosity>(s),
-                            ring_viscosity<Viscosity, Lattice>(s), physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
+template <class Viscosity, class Kernel = kernel::CubicSpline, class Lattice>
+SphRing<Viscosity, Kernel> make_sph_ring(const ViscousRingParams& s, const Lattice& lat) {
+  return SphRing<Viscosity, Kernel>(ring_particles_on<Kernel>(s, lat), s.box(), {}, {}, ring_time_steps<Viscosity>(s),
+                                    ring_viscosity<Viscosity, Lattice>(s),
+                                    physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
 }
 
 namespace detail {
-template <class Lattice, class OnStep, class OnSnapshot>
+template <class Kernel, class Lattice, class OnStep, class OnSnapshot>
 RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnStep&& on_step, OnSnapshot&& on_snapshot,
                             examples::Checkpoints* checkpoints) {
-  using MG = physics::ShearViscosityMG<RingKernel, 2>;
+  using MG = physics::ShearViscosityMG<Kernel, 2>;
   using NS = physics::NavierStokesViscosity<2>;
   auto run = [&](auto sim) { return run_ring(sim, s, on_step, on_snapshot, checkpoints); };
-  if (s.cycle == 0) return s.viscosity == "ns" ? run(make_sph_ring<NS>(s, lat)) : run(make_sph_ring<MG>(s, lat));
+  if (s.cycle == 0)
+    return s.viscosity == "ns" ? run(make_sph_ring<NS, Kernel>(s, lat)) : run(make_sph_ring<MG, Kernel>(s, lat));
   return examples::with_remap(s.remap, [&](auto order) {
-    return s.viscosity == "ns" ? run(make_rsph_ring<NS>(s, lat, order)) : run(make_rsph_ring<MG>(s, lat, order));
+    return s.viscosity == "ns" ? run(make_rsph_ring<NS, Kernel>(s, lat, order))
+                               : run(make_rsph_ring<MG, Kernel>(s, lat, order));
   });
 }
 }  // namespace detail
 
 /// Runs the ring with the scene's regularization cycle, lattice and viscosity. on_step(sim) after each
 /// step; on_snapshot(sim, k) at the start (k = -1) and at each snapshot k; with checkpoints, as they say.
-template <class OnStep, class OnSnapshot>
+template <class Kernel = kernel::CubicSpline, class OnStep, class OnSnapshot>
 RingRun run_viscous_ring(const ViscousRingParams& s, OnStep&& on_step, OnSnapshot&& on_snapshot,
                          examples::Checkpoints* checkpoints = nullptr) {
   s.validate();
-  return with_ring_lattice(
-      s, [&](const auto& lat) { return detail::run_viscous_ring_on(s, lat, on_step, on_snapshot, checkpoints); });
+  return with_ring_lattice(s, [&](const auto& lat) {
+    return detail::run_viscous_ring_on<Kernel>(s, lat, on_step, on_snapshot, checkpoints);
+  });
 }
 
 }  // namespace rsph::scenes
