@@ -18,7 +18,8 @@ from rsph_plot import FARGO3D_LABEL, FARGO3D_PROFILE, folders_and_png, method_la
 
 
 def label(summary):
-    return (f"{method_label(summary)}, {summary['eos']}, N={summary['particles_initial']}, "
+    dim = "3D " if summary.get("dim", 2) == 3 else ""
+    return (f"{dim}{method_label(summary)}, {summary['eos']}, N={summary['particles_initial']}, "
             f"{summary['orbits']:g} orbits, {summary['wall_seconds']:.0f} s")
 
 
@@ -41,6 +42,9 @@ def main():
         jumps = np.where(np.abs(np.diff(wp)) > math.pi)[0] + 1  # no line across the wrap
         for seg_r, seg_p in zip(np.split(wr, jumps), np.split(wp, jumps)):
             ax.plot(seg_r, seg_p, "w--", lw=0.8)
+        if os.path.exists(f"{d}/wake_crossings.csv"):  # the crest traced from the planet (paper::wake_crossings)
+            x = read_csv(f"{d}/wake_crossings.csv")
+            ax.plot(x["r"], x["phi_measured"], "r.", ms=2)
         ax.set_xlabel("r / a")
         ax.set_ylabel("phi - phi_p")
         ax.set_title(f"log10 Sigma/Sigma_0: {label(s)}", fontsize=9)

@@ -382,6 +382,35 @@ def kh3d_claim(results):
             "above 2)", a, a > 2)
 
 
+def disk3d_runs(suite):
+    runs = []
+    for n, orbits in pick(suite, [(20000, 2)], [(20000, 2), (50000, 2)], [(20000, 2), (200000, 10)]):
+        size = f"{n} particles, {orbits} orbits"
+        args = ["--dim", 3, "--particles", n, "--orbits", orbits, "--snapshot-every", orbits]
+        guess = n * orbits / 2500
+        runs.append(Run(SPH, size, "rsph-planet-disk", args + ["--method", "sph"], 2.5 * guess))
+        runs += rsph_both(size, "rsph-planet-disk", args, guess, 1.2 * guess)
+    return runs
+
+
+def disk3d_measures(s, folder):
+    out = disk_measures(s, folder)
+    out.update({"wake's rms offset from linear theory (rad)": s["wake_rms_offset"],
+                "thickness / hydrostatic": s["thickness_final"],
+                "|thickness / hydrostatic - 1|": abs(s["thickness_final"] - 1),
+                "wall s per orbit": s["wall_seconds_per_orbit"]})
+    return out
+
+
+def disk3d_claim(results):
+    first = [m for r, s, m in results if r.method == RSPH1]
+    if not first:
+        return None
+    t = first[-1]["thickness / hydrostatic"]
+    return ("RSPH keeps the 3D disk in vertical hydrostatic equilibrium: its mass-weighted rms z/R over the "
+            "profile's (RSPH first order, largest size; within 10 % of 1)", t, abs(t - 1) < 0.1)
+
+
 class Test:
     def __init__(self, key, title, program, runs, measures, headline, claim, figure, reference):
         self.key, self.title, self.program = key, title, program
@@ -420,6 +449,9 @@ TESTS = [
     Test("drifting_pulse_3d", "Drifting pulse in 3D (a cube along the diagonal)", "rsph-drifting-pulse",
          pulse3d_runs, plain(pulse3d_measures), "width growth s=0.5 (spacings)", pulse3d_claim, "drifting_pulse",
          "the cube's initial top hat"),
+    Test("planet_disk_3d", "A planet in a 3D disk (H/R = 0.05, the 2D disk's Sigma)", "rsph-planet-disk",
+         disk3d_runs, disk3d_measures, "wake's rms offset from linear theory (rad)", disk3d_claim, "planet_disk",
+         "the wake of linear theory (Ogilvie & Lubow 2002) and the vertically isothermal equilibrium"),
     Test("kelvin_helmholtz_3d", "Kelvin-Helmholtz at chi = 10 in 3D (extruded along z)", "rsph-kelvin-helmholtz",
          kh3d_runs, plain(kh3d_measures), "1 / amplification", kh3d_claim, "kelvin_helmholtz",
          "linear theory's growth rate 2 pi / tau_KH"),

@@ -20,10 +20,17 @@ namespace ex = rsph::examples;
 
 namespace {
 
-/// The final state as the paper's figures show it, written as CSV.
+/// The wake measured on the final map: its crest traced across each ring 0.6 <= r <= 1.6 outside |r - 1| < 0.1
+/// (searched within 0.3 rad, paper::wake_crossings), and its rms offset from linear theory.
+struct WakeFit {
+  std::size_t crossings = 0;
+  double rms_offset = 0.0;
+};
+
+/// The final state as the paper's figures show it, written as CSV; the wake's offset from linear theory.
 template <class P>
-void write_maps(const std::filesystem::path& dir, const P& p, const scenes::PlanetDiskParams& s, double time,
-                std::size_t n_r, std::size_t n_phi) {
+WakeFit write_maps(const std::filesystem::path& dir, const P& p, const scenes::PlanetDiskParams& s, double time,
+                   std::size_t n_r, std::size_t n_phi) {
   using K = kernel::CubicSpline;
   const double phi_p = s.star_planet().planet_phase(time);
   const paper::PolarGrid grid{s.r_in, s.r_out, phi_p, n_r, n_phi};
@@ -67,6 +74,11 @@ void write_maps(const std::filesystem::path& dir, const P& p, const scenes::Plan
     wake.row({r, std::remainder(phi, 2.0 * std::numbers::pi)});  // wrapped into [-pi, pi]
   }
   wake.close();
+  const auto crossings = paper::wake_crossings(grid, sigma, 1.0, s.aspect, 0.6, 1.6, 0.1, 0.3);
+  io::CsvWriter crossed(dir / "wake_crossings.csv", {"r", "phi_theory", "phi_measured", "offset"});
+  for (const auto& c : crossings) crossed.row({c.r, c.phi_theory, c.phi_measured, c.offset()});
+  crossed.close();
+  return {crossings.size(), paper::rms_offset(crossings)};
 }
 
 struct Options {
@@ -76,21 +88,31 @@ struct Options {
   double snapshot_every = 10.0;
   std::size_t map_nr = 210;
   std::size_t map_nphi = 256;
+  std::string kernel = "cubic";
 };
 
 /// The options from the command line, or none when --help was asked for.
 std::optional<Options> parse_options(int argc, char** argv) {
   Options opt;
-  auto& [s, common, resolution, snapshot_every, map_nr, map_nphi] = opt;
+  auto& [s, common, resolution, snapshot_every, map_nr, map_nphi, kernel] = opt;
   ex::po::options_description desc("rsph-planet-disk options");
   ex::Flags flag(desc, common);
-  ex::add_common_options(flag, common, "--particles 8000 --orbits 10 --snapshot-every 5", "orbits");
+  ex::add_common_options(flag, common,
+                         "--particles 8000 --orbits 10 --snapshot-every 5; in 3D --particles 20000 --orbits 2 "
+                         "--snapshot-every 1",
+                         "orbits");
+  flag("dim", s.dim,
+       "2: the paper's disk; 3: a vertically isothermal disk of the same Sigma (H = 0.05 r), RSPH on the cubic "
+       "lattice inside |z| <= surface H");
+  flag("surface", s.surface, "3D: the disk's surface, and the lattice's reach, in scale heights");
   flag("method", s.method, "rsph: regularized SPH without artificial viscosity; sph: grad-h SPH with viscosity");
   ex::add_remap_flag(flag, s.remap);
   flag("eos", s.eos, "isothermal (c_s / v_K fixed) or polytropic (eq. 21)");
   flag("q", s.q, "M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune");
-  flag("resolution", resolution, "low (48 000 particles), med (108 000) or high (191 000)");
-  flag("h-over-dx", s.h_over_dx, "RSPH: h / Delta; SPH: eta");
+  flag("resolution", resolution,
+       "low (48 000 particles), med (108 000) or high (191 000); in 3D 200 000, 450 000, 800 000");
+  flag("h-over-dx", s.h_over_dx, "RSPH: h / Delta; SPH: eta (3D: 1.2 unless given)");
+  flag("kernel", kernel, ex::kernel_names);
   flag("lattice", s.lattice,
        "square, hexagonal or rings (orbit-following: rings of width Delta turned with their gas at every "
        "remap): the start and RSPH's regularization lattice (the same particle count)");
@@ -121,22 +143,25 @@ std::optional<Options> parse_options(int argc, char** argv) {
                  "Usage: rsph-planet-disk [--method rsph] [--eos isothermal] [--q 1e-3] [--resolution low] "
                  "[--out DIR]"))
     return std::nullopt;
+  if (s.dim == 3 && vm["h-over-dx"].defaulted()) s.h_over_dx = scenes::PlanetDiskParams::h_over_dx_3d;
   if (!vm.count("particles")) {
+    const bool flat = s.dim == 2;
     if (resolution == "low")
-      s.particles = 48000;
+      s.particles = flat ? 48000 : 200000;
     else if (resolution == "med")
-      s.particles = 108000;
+      s.particles = flat ? 108000 : 450000;
     else if (resolution == "high")
-      s.particles = 191000;
+      s.particles = flat ? 191000 : 800000;
     else
       throw InputError("unknown resolution '" + resolution + "' (low, med, high)");
   }
   if (ex::quick_preset(common)) {
-    if (!vm.count("particles")) s.particles = 8000;
-    if (vm["orbits"].defaulted()) s.orbits = 10.0;
-    if (vm["snapshot-every"].defaulted()) snapshot_every = 5.0;
+    if (!vm.count("particles")) s.particles = s.dim == 3 ? 20000 : 8000;
+    if (vm["orbits"].defaulted()) s.orbits = s.dim == 3 ? 2.0 : 10.0;
+    if (vm["snapshot-every"].defaulted()) snapshot_every = s.dim == 3 ? 1.0 : 5.0;
   }
   s.validate();
+  ex::check_kernel(kernel);
   require(snapshot_every > 0.0, "--snapshot-every must be positive");
   require(map_nr >= 2 && map_nphi >= 4, "the Sigma map needs at least 2 x 4 cells");
   ex::record_run(common, argc, argv);
@@ -144,15 +169,17 @@ std::optional<Options> parse_options(int argc, char** argv) {
 }
 
 int run(Options opt) {
-  auto& [s, common, resolution, snapshot_every, map_nr, map_nphi] = opt;
+  auto& [s, common, resolution, snapshot_every, map_nr, map_nphi, kernel] = opt;
   ex::apply_threads(common.threads);
   const auto dir = ex::prepare_output(common);
   const double period = s.period();
-  io::Progress progress(fmt::format("rsph-planet-disk {} {}", s.method, s.eos), s.orbits * period);
+  io::Progress progress(fmt::format("rsph-planet-disk {}D {} {}", s.dim, s.method, s.eos), s.orbits * period);
   io::CsvWriter timeline(dir / "timeline.csv", {"orbit", "time", "mass", "mass_removed", "gap_depth", "particles",
                                                 "steps", "regularizations", "wall_seconds"});
   std::size_t snapshots = 0;
   double next_snapshot = 0.0;
+  WakeFit wake;
+  double thickness_initial = 0.0, thickness_final = 0.0;
   auto on_step = [&](const auto& sim) {
     if (!common.quiet) progress.update(sim.time(), sim.steps());
   };
@@ -160,6 +187,12 @@ int run(Options opt) {
     timeline.row({d.orbit, d.time, d.mass, d.mass_removed, d.gap_depth, static_cast<double>(d.particles),
                   static_cast<double>(d.steps), static_cast<double>(d.regularizations), d.wall_seconds});
     const bool last = d.orbit >= s.orbits * (1.0 - 1e-12);
+    if constexpr (std::decay_t<decltype(sim)>::dim == 3) {
+      // between the zones: the disk whose gas moves freely
+      const double thickness = scenes::thickness_ratio(sim.particles(), s.vertical(), s.zones().inner, s.zones().outer);
+      if (d.steps == 0) thickness_initial = thickness;
+      thickness_final = thickness;
+    }
     if (d.orbit >= next_snapshot * (1.0 - 1e-12) || last) {
       const Vec<2> star = s.star_planet().star_position(sim.time()),
                    planet = s.star_planet().planet_position(sim.time());
@@ -168,15 +201,17 @@ int run(Options opt) {
                          {{"star", {star.x(), star.y()}}, {"planet", {planet.x(), planet.y()}}});
       next_snapshot += snapshot_every;
     }
-    if (last) write_maps(dir, sim.particles(), s, sim.time(), map_nr, map_nphi);
+    if (last) wake = write_maps(dir, scenes::seen_from_above(sim.particles()), s, sim.time(), map_nr, map_nphi);
   };
   ex::Checkpoints checkpoints(common, dir, "rsph-planet-disk", period);
   const auto part = checkpoints.add("program", [&](io::Archive& ar) {
     timeline.checkpoint(ar, "timeline");
     ar("snapshots", snapshots);
     ar("next_snapshot", next_snapshot);
+    ar("thickness_initial", thickness_initial);
   });
-  const auto r = scenes::run_planet_disk(s, on_step, on_sample, &checkpoints);
+  const auto r = ex::with_kernel(
+      kernel, [&](auto k) { return scenes::run_planet_disk<decltype(k)>(s, on_step, on_sample, &checkpoints); });
   progress.finish();
   timeline.close();
 
@@ -189,15 +224,24 @@ int run(Options opt) {
     mass_over_time.push_back(j);
   }
   io::Json summary;
-  summary.set("test", "planet_disk").set("method", s.method).set("eos", s.eos).set("q", s.q);
+  summary.set("test", "planet_disk")
+      .set("dim", s.dim)
+      .set("kernel", kernel)
+      .set("method", s.method)
+      .set("eos", s.eos)
+      .set("q", s.q);
   if (s.rsph()) summary.set("remap", s.remap);
   summary.set("max_bin", s.rsph() ? s.max_bin : 0);
   summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
-  summary.set("lattice", s.lattice);
+  summary.set("lattice", s.dim == 3 ? (s.rsph() ? "cubic" : "columns") : s.lattice);
+  if (s.dim == 3) summary.set("surface_in_H", s.surface);
   summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
   summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);
   summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final).set("mass_removed", r.mass_removed);
   summary.set("mass_error", r.max_mass_error).set("gap_depth", r.samples.back().gap_depth);
+  summary.set("wake_rms_offset", wake.rms_offset).set("wake_crossings", static_cast<std::uint64_t>(wake.crossings));
+  summary.set("wall_seconds_per_orbit", r.wall_seconds / s.orbits);
+  if (s.dim == 3) summary.set("thickness_initial", thickness_initial).set("thickness_final", thickness_final);
   ex::write_cost(summary, r);
   summary.set("cpu_seconds", ex::cpu_seconds()).set("remap_seconds", r.remap_seconds);
   summary.set("phase_seconds", phases).set("timeline", mass_over_time);
@@ -205,9 +249,9 @@ int run(Options opt) {
   summary.write(dir / "summary.json");
   ex::draw_figure(common, dir, "planet_disk");
   fmt::print(
-      "rsph-planet-disk {} {} q = {}: {} particles, {} steps, {} regularizations, {:.1f} s ({:.2f} M updates/s); "
+      "rsph-planet-disk {}D {} {} q = {}: {} particles, {} steps, {} regularizations, {:.1f} s ({:.2f} M updates/s); "
       "gap depth {:.3f}, mass removed {:.2e} of {:.3e}, mass error {:.1e}\n",
-      s.method, s.eos, s.q, r.particles_initial, r.steps, r.regularizations, r.wall_seconds,
+      s.dim, s.method, s.eos, s.q, r.particles_initial, r.steps, r.regularizations, r.wall_seconds,
       static_cast<double>(r.updates) / r.wall_seconds * 1e-6, r.samples.back().gap_depth, r.mass_removed,
       r.mass_initial, r.max_mass_error);
   return 0;

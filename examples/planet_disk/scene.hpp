@@ -3,9 +3,11 @@
 // circular orbit at a = 1 in a disk of uniform Sigma_0 (eq. 19) between r = 0.4 and 2.5, locally
 // isothermal with c_s / v_K = 0.05 or polytropic (eq. 21). Gas in [0.4, 0.5] and [2.4, 2.5] moves on
 // fixed circular orbits. RSPH without artificial viscosity (h/Delta = 1.4, Appendix A's adaptive
-// regularization) or equal-mass grad-h SPH with artificial viscosity, on the same initial lattice.
+// regularization) or equal-mass grad-h SPH with artificial viscosity, on the same initial lattice. In 3D
+// (scene3d.hpp) the same Sigma_0 in a vertically isothermal disk, its surface density measured from above.
 #include "common/disk_sites.hpp"
 #include "common/runner.hpp"
+#include "planet_disk/scene3d.hpp"
 #include "rsph/paper/disk.hpp"
 #include "rsph/paper/keplerian_zones.hpp"
 #include "rsph/paper/star_planet.hpp"
@@ -21,6 +23,7 @@
 namespace rsph::scenes {
 
 struct PlanetDiskParams {
+  int dim = 2;                     ///< 2: the paper's disk; 3: a vertically isothermal disk of the same Sigma
   double q = 1e-3;                 ///< M_p / (M_* + M_p): 1e-3 Jupiter, 1e-4 Neptune
   std::string eos = "isothermal";  ///< isothermal (§5.2, §5.4) or polytropic (§5.3)
   std::string method = "rsph";     ///< rsph: regularized, no artificial viscosity; sph: grad-h SPH
@@ -48,8 +51,16 @@ struct PlanetDiskParams {
   /// RSPH: individual time steps in bins down to 2^-max_bin of the longest (0: one global step); the
   /// force condition at the inner edge sets the shortest, r = 2.4 could step 5 times longer. SPH: global.
   int max_bin = 3;
+  /// 3D: the gas and the lattice reach |z| <= surface H(R), H = aspect R (3 H leaves out 0.3 % of the column)
+  double surface = 3.0;
+  /// 3D: h / Delta of the cubic lattice unless given (59 neighbours, as Sedov's and Sod's)
+  static constexpr double h_over_dx_3d = 1.2;
 
   void validate() const {
+    require(dim == 2 || dim == 3, "planet disk: --dim must be 2 or 3 (got " + std::to_string(dim) + ")");
+    require(dim == 2 || (eos == "isothermal" && lattice == "square"),
+            "planet disk: the 3D disk is locally isothermal on the cubic lattice (--eos isothermal --lattice square)");
+    require(dim == 2 || surface > 0.0, "planet disk: --surface must be positive");
     require(q >= 0.0 && q < 0.1, "planet disk: q must lie in [0, 0.1) (got " + std::to_string(q) + ")");
     require(eos == "isothermal" || eos == "polytropic",
             "planet disk: unknown equation of state '" + eos + "' (isothermal, polytropic)");
@@ -73,10 +84,15 @@ struct PlanetDiskParams {
   }
   bool rsph() const { return method == "rsph"; }
   double area() const { return std::numbers::pi * (r_out * r_out - r_in * r_in); }
+  /// 3D: the flared disk's volume, r_in <= R <= r_out and |z| <= surface aspect R.
+  double volume() const {
+    return 4.0 * std::numbers::pi / 3.0 * surface * aspect * (r_out * r_out * r_out - r_in * r_in * r_in);
+  }
   /// Delta for the particle count: the square's side, the hexagonal lattice's nearest-neighbour distance
   /// (cells of area sqrt(3)/2 Delta^2), or the rings' width, rounded so that whole rings fill the disk; every
   /// lattice holds about `particles`.
   double spacing() const {
+    if (dim == 3) return method == "sph" ? sph_column_spacing() : std::cbrt(volume() / particles);
     const double d = std::sqrt(area() / particles / (lattice == "hexagonal" ? std::numbers::sqrt3 / 2.0 : 1.0));
     if (lattice != "rings") return d;
     return (r_out - r_in) / std::max(1.0, std::round((r_out - r_in) / d));
@@ -86,11 +102,26 @@ struct PlanetDiskParams {
     return lattice == "rings" ? std::max(1.0, std::round(zone_width / spacing())) * spacing() : zone_width;
   }
   double h() const { return h_over_dx * spacing(); }
+  /// 3D: the vertical profile of the isothermal disk, cut at the surface.
+  VerticalProfile vertical() const { return VerticalProfile(aspect, surface * aspect); }
+  /// 3D SPH: particles per column, so that their spacing in the plane at r = 1 is about the columns' spacing
+  /// Delta (area / Delta^2 columns of I / Delta particles hold the particle count), and Delta that makes the
+  /// count with that whole number per column.
+  int sph_column_particles() const {
+    const double I = vertical().integral();
+    return std::max(1, static_cast<int>(std::lround(I / std::cbrt(area() * I / particles))));
+  }
+  double sph_column_spacing() const { return std::sqrt(area() * sph_column_particles() / particles); }
   paper::StarAndPlanet star_planet() const { return {1.0, q, 1.0, softening, ramp_orbits}; }
   double period() const { return star_planet().period(); }
   /// Pressure support: v_phi^2 = v_K^2 (1 - aspect^2 / Gamma) for Sigma uniform and P ~ Sigma / r, with
-  /// Gamma = 1 for the isothermal and gamma for the polytropic disk (whose P starts at c_s^2 Sigma / gamma).
-  double v_factor() const { return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0)); }
+  /// Gamma = 1 for the isothermal and gamma for the polytropic disk (whose P starts at c_s^2 Sigma / gamma). In
+  /// 3D the midplane's P = c_s^2 rho ~ 1 / r^2: v_phi^2 = v_K^2 (1 - 2 aspect^2), and less above it
+  /// (KeplerianZones::Omega).
+  double v_factor() const {
+    if (dim == 3) return std::sqrt(1.0 - 2.0 * aspect * aspect);
+    return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0));
+  }
   paper::KeplerianZones zones() const { return {1.0, r_in + zone(), r_out - zone(), v_factor(), keep_zone_members}; }
   Box<2> box() const {
     Box<2> b;
@@ -101,10 +132,12 @@ struct PlanetDiskParams {
   }
 };
 
-/// c_s(x) = aspect v_K(|x|) about the centre of mass.
+/// c_s(x) = aspect v_K(R) about the centre of mass, R the distance from it in the plane (from the z axis in 3D):
+/// vertically isothermal.
 struct DiskSoundSpeed {
   double aspect = 0.05, GM = 1.0;
   double operator()(const Vec<2>& x) const { return aspect * std::sqrt(GM / x.norm()); }
+  double operator()(const Vec<3>& x) const { return aspect * std::sqrt(GM / std::hypot(x.x(), x.y())); }
   template <class F>
   void describe(F&& f) const {
     f("cs_over_vK", aspect);
@@ -130,10 +163,10 @@ struct DiskPolytropicK {
 /// Lattice sites in r_in <= r <= r_out on circular orbits. RSPH masses carry the cell area over the kernel's
 /// lattice sum, so rho = Sigma_0 in the bulk at h = (h/Delta) Delta; SPH particles have equal masses Sigma_0
 /// times the cell area.
-template <class Lattice>
+template <class Kernel = kernel::CubicSpline, class Lattice>
 ParticleSet<2, false> disk_particles_on(const PlanetDiskParams& s, const Lattice& lat) {
   s.validate();
-  const double bias = s.rsph() ? examples::lattice_bias<kernel::CubicSpline, Lattice>(s.h_over_dx) : 1.0;
+  const double bias = s.rsph() ? examples::lattice_bias<Kernel, Lattice>(s.h_over_dx) : 1.0;
   const auto zones = s.zones();
   ParticleSet<2, false> p;
   examples::for_each_site_in_annulus(lat, s.box(), s.r_in, s.r_out, [&](const Vec<2>& x, double area) {
@@ -222,6 +255,15 @@ inline void checkpoint_disk_run(io::Archive& ar, DiskRun& r) {
   ar("output_seconds", r.output_seconds);
 }
 
+/// x^2 + y^2: the squared distance from the centre (2D) or from the z axis (3D).
+template <int D>
+double in_plane_squared_norm(const Vec<D>& x) {
+  if constexpr (D == 2)
+    return x.squaredNorm();
+  else
+    return x.x() * x.x() + x.y() * x.y();
+}
+
 template <class Sim, class OnStep, class OnSample>
 DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample,
                  examples::Checkpoints* checkpoints) {
@@ -235,7 +277,11 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
   const double r_lo = s.r_in - s.spacing(), r_hi = s.r_out + s.spacing();
   auto after_step = [&](Sim& sm) {
     r.mass_removed += examples::remove_particles(
-        sm, [&](const Vec<2>& x) { return x.squaredNorm() < r_lo * r_lo || x.squaredNorm() > r_hi * r_hi; },
+        sm,
+        [&](const Vec<Sim::dim>& x) {
+          const double R2 = in_plane_squared_norm(x);
+          return R2 < r_lo * r_lo || R2 > r_hi * r_hi;
+        },
         r.particles_removed);
     on_step(sm);
   };
@@ -246,7 +292,7 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
     d.orbit = sm.time() / period;
     d.mass = sm.totals().mass;
     d.mass_removed = r.mass_removed;
-    d.gap_depth = disk_profile(sm.particles(), s).gap_depth;
+    d.gap_depth = disk_profile(seen_from_above(sm.particles()), s).gap_depth;
     d.particles = sm.particles().n_real;
     d.steps = sm.steps();
     d.regularizations = sm.regularizations();
@@ -267,18 +313,18 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
 
 /// The scene's methods: RSPH with Appendix A's schedule and the annulus closing the edge cells (on the rings
 /// lattice the edges are rings, whose cells take in what lies beyond: no region), and equal-mass grad-h SPH
-/// with artificial viscosity; both with the star and planet and the boundary zones.
-using DiskKernel = kernel::CubicSpline;
+/// with artificial viscosity; both with the star and planet and the boundary zones; with any kernel (the cubic
+/// spline by default; the measurements take the cubic spline whatever the run's).
 template <class Lattice>
 using DiskRegion = std::conditional_t<PerSiteLattice<Lattice>, region::Unbounded, region::Annulus>;
-template <class Lattice, class Order = regularize::FirstOrder>
-using DiskRegularizer = regularize::LatticeRegularizer<Lattice, schedule::Adaptive<DiskKernel, 2>,
-                                                       geometry::LocalVoronoi, DiskRegion<Lattice>, Order>;
-template <class Lattice, class EOS, class Order = regularize::FirstOrder>
+template <class Lattice, class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
+using DiskRegularizer = regularize::LatticeRegularizer<Lattice, schedule::Adaptive<Kernel, 2>, geometry::LocalVoronoi,
+                                                       DiskRegion<Lattice>, Order>;
+template <class Lattice, class EOS, class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
 using RsphDisk =
-    Simulation<2, DiskKernel, EOS, DiskRegularizer<Lattice, Order>, paper::StarAndPlanet, paper::KeplerianZones>;
-template <class EOS>
-using SphDisk = Simulation<2, DiskKernel, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity,
+    Simulation<2, Kernel, EOS, DiskRegularizer<Lattice, Order, Kernel>, paper::StarAndPlanet, paper::KeplerianZones>;
+template <class EOS, class Kernel = kernel::CubicSpline>
+using SphDisk = Simulation<2, Kernel, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity,
                            paper::StarAndPlanet, paper::KeplerianZones>;
 
 inline TimeStepParams disk_time_steps(const PlanetDiskParams& s) {
@@ -297,42 +343,97 @@ DiskRegion<Lattice> disk_region(const PlanetDiskParams& s) {
     return region::Annulus{s.r_in, s.r_out};
 }
 
-template <class Lattice, class EOS, class Order = regularize::FirstOrder>
-RsphDisk<Lattice, EOS, Order> make_rsph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Order order = {}) {
+template <class Kernel = kernel::CubicSpline, class Lattice, class EOS, class Order = regularize::FirstOrder>
+RsphDisk<Lattice, EOS, Order, Kernel> make_rsph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos,
+                                                     Order order = {}) {
   // Edge cells are closed at 0.75 Delta along the edge and by the disk's circles across it, and a new
   // cell less than half covered hands its share on: the edges stay where the disk ends.
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-  DiskRegularizer<Lattice, Order> reg(
-      lat, schedule::Adaptive<DiskKernel, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)},
+  DiskRegularizer<Lattice, Order, Kernel> reg(
+      lat, schedule::Adaptive<Kernel, 2>{s.N_min, s.N_max, s.dN_max, static_cast<std::uint64_t>(s.max_steps)},
       {.remap = remap, .region = disk_region<Lattice>(s), .order = order});
-  return RsphDisk<Lattice, EOS, Order>(disk_particles_on(s, lat), s.box(), std::move(eos), std::move(reg),
-                                       disk_time_steps(s), s.star_planet(), s.zones());
+  return RsphDisk<Lattice, EOS, Order, Kernel>(disk_particles_on<Kernel>(s, lat), s.box(), std::move(eos),
+                                               std::move(reg), disk_time_steps(s), s.star_planet(), s.zones());
 }
 
-template <class Lattice, class EOS>
-SphDisk<EOS> make_sph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos) {
-  return SphDisk<EOS>(disk_particles_on(s, lat), s.box(), std::move(eos), {}, disk_time_steps(s),
-                      physics::GradH<2>{s.h_over_dx}, physics::ArtificialViscosity{s.alpha, s.beta}, s.star_planet(),
-                      s.zones());
+template <class Kernel = kernel::CubicSpline, class Lattice, class EOS>
+SphDisk<EOS, Kernel> make_sph_disk(const PlanetDiskParams& s, const Lattice& lat, EOS eos) {
+  return SphDisk<EOS, Kernel>(disk_particles_on<Kernel>(s, lat), s.box(), std::move(eos), {}, disk_time_steps(s),
+                              physics::GradH<2>{s.h_over_dx}, physics::ArtificialViscosity{s.alpha, s.beta},
+                              s.star_planet(), s.zones());
+}
+
+/// The 3D disk's methods: RSPH on the cubic lattice inside the flared disk, and equal-mass grad-h SPH.
+using Disk3EOS = eos::LocallyIsothermal<DiskSoundSpeed>;
+template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
+using DiskRegularizer3 =
+    regularize::LatticeRegularizer<lattice::Cubic, schedule::Adaptive<Kernel, 3>, geometry::DefaultCellBuilder<3>::type,
+                                   region::FlaredDisk, Order>;
+template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
+using RsphDisk3 =
+    Simulation<3, Kernel, Disk3EOS, DiskRegularizer3<Order, Kernel>, paper::StarAndPlanet, paper::KeplerianZones>;
+template <class Kernel = kernel::CubicSpline>
+using SphDisk3 = Simulation<3, Kernel, Disk3EOS, regularize::None, physics::GradH<3>, physics::ArtificialViscosity,
+                            paper::StarAndPlanet, paper::KeplerianZones>;
+
+/// RSPH in 3D: Appendix A's schedule with the bounds of the paper's h/Delta (0.9 and 3.0 on the lattice, which
+/// give its N_min = 4.5 and N_max = 107 in 2D), edge cells closed by the flared disk's cylinders and cones.
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
+RsphDisk3<Order, Kernel> make_rsph_disk_3d(const PlanetDiskParams& s, Order order = {}) {
+  s.validate();
+  const double dx = s.spacing(), slope = s.surface * s.aspect;
+  const Box<3> box = disk_box_3d(s.r_out, dx);
+  const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
+  DiskRegularizer3<Order, Kernel> reg(
+      lattice::Cubic{dx},
+      schedule::Adaptive<Kernel, 3>::for_h_over_dx(0.9, 3.0, s.dN_max, static_cast<std::uint64_t>(s.max_steps)),
+      {.remap = remap, .region = region::FlaredDisk{s.r_in, s.r_out, slope}, .order = order});
+  auto p = flared_disk_lattice(box, dx, s.h(), s.r_in, s.r_out, slope, s.vertical(), s.sigma0, s.zones());
+  require(p.n_real > 0, "planet disk: the flared disk holds no lattice site");
+  return RsphDisk3<Order, Kernel>(std::move(p), box, Disk3EOS(DiskSoundSpeed{s.aspect, 1.0}), std::move(reg),
+                                  disk_time_steps(s), s.star_planet(), s.zones());
+}
+
+template <class Kernel = kernel::CubicSpline>
+SphDisk3<Kernel> make_sph_disk_3d(const PlanetDiskParams& s) {
+  s.validate();
+  const double dx = s.spacing();
+  auto p = flared_disk_columns(s.box(), dx, s.sph_column_particles(), s.h_over_dx, s.r_in, s.r_out, s.vertical(),
+                               s.sigma0, s.zones());
+  require(p.n_real > 0, "planet disk: the disk holds no column");
+  return SphDisk3<Kernel>(std::move(p), disk_box_3d(s.r_out, dx), Disk3EOS(DiskSoundSpeed{s.aspect, 1.0}), {},
+                          disk_time_steps(s), physics::GradH<3>{s.h_over_dx},
+                          physics::ArtificialViscosity{s.alpha, s.beta}, s.star_planet(), s.zones());
 }
 
 namespace detail {
 
-template <class Lattice, class EOS, class Run>
+template <class Kernel, class Run>
+auto with_method_3d(const PlanetDiskParams& s, Run&& run) {
+  if (s.rsph())
+    return examples::with_remap(s.remap, [&](auto order) {
+      auto sim = make_rsph_disk_3d<Kernel>(s, order);
+      return run(sim);
+    });
+  auto sim = make_sph_disk_3d<Kernel>(s);
+  return run(sim);
+}
+
+template <class Kernel, class Lattice, class EOS, class Run>
 auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& run) {
   if (s.rsph())
     return examples::with_remap(s.remap, [&](auto order) {
-      auto sim = make_rsph_disk(s, lat, eos, order);
+      auto sim = make_rsph_disk<Kernel>(s, lat, eos, order);
       return run(sim);
     });
-  auto sim = make_sph_disk(s, lat, std::move(eos));
+  auto sim = make_sph_disk<Kernel>(s, lat, std::move(eos));
   return run(sim);
 }
 
 /// with_method on the scene's lattice.
-template <class EOS, class Run>
+template <class Kernel, class EOS, class Run>
 auto on_lattice(const PlanetDiskParams& s, EOS eos, Run&& run) {
-  return with_disk_lattice(s, [&](const auto& lat) { return with_method(s, lat, eos, run); });
+  return with_disk_lattice(s, [&](const auto& lat) { return with_method<Kernel>(s, lat, eos, run); });
 }
 
 }  // namespace detail
@@ -340,16 +441,17 @@ auto on_lattice(const PlanetDiskParams& s, EOS eos, Run&& run) {
 /// Runs the disk; on_step(sim) after each step, on_sample(sim, sample) at the start and every
 /// measure_every orbits (the last at the end of the run); with checkpoints, as they say (and on resume from
 /// the last one).
-template <class OnStep, class OnSample>
+template <class Kernel = kernel::CubicSpline, class OnStep, class OnSample>
 DiskRun run_planet_disk(const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample,
                         examples::Checkpoints* checkpoints = nullptr) {
   s.validate();
   const DiskSoundSpeed cs{s.aspect, 1.0};
   auto run = [&](auto& sim) { return detail::run_disk(sim, s, on_step, on_sample, checkpoints); };
+  if (s.dim == 3) return detail::with_method_3d<Kernel>(s, run);
   if (s.eos == "polytropic")
-    return detail::on_lattice(s, eos::Polytropic<DiskPolytropicK>(s.gamma, DiskPolytropicK{cs, s.gamma, s.sigma0}),
-                              run);
-  return detail::on_lattice(s, eos::LocallyIsothermal<DiskSoundSpeed>(cs), run);
+    return detail::on_lattice<Kernel>(
+        s, eos::Polytropic<DiskPolytropicK>(s.gamma, DiskPolytropicK{cs, s.gamma, s.sigma0}), run);
+  return detail::on_lattice<Kernel>(s, eos::LocallyIsothermal<DiskSoundSpeed>(cs), run);
 }
 
 }  // namespace rsph::scenes

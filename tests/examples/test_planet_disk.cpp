@@ -63,6 +63,37 @@ TEST_CASE("the wake of linear theory trails outside the orbit and leads inside",
   }
 }
 
+TEST_CASE("the wake's crest is traced ring by ring and its offset from linear theory measured",
+          "[examples][disk][analysis]") {
+  const paper::PolarGrid grid{0.4, 2.5, 0.3, 210, 512};
+  const double resolution = std::numbers::pi / 512;  // half an azimuthal cell
+  auto map = [&](auto crest) {
+    std::vector<double> sigma(grid.n_r * grid.n_phi);
+    for (std::size_t i = 0; i < grid.n_r; ++i)
+      for (std::size_t j = 0; j < grid.n_phi; ++j) {
+        const double d = std::remainder(grid.phi(j) - crest(grid.r(i)), 2.0 * std::numbers::pi);
+        sigma[i * grid.n_phi + j] = 1.0 + std::exp(-d * d / 0.01) + 0.5 * std::exp(-std::pow(d - 2.0, 2) / 0.01);
+      }
+    return sigma;
+  };
+  // a crest on theory's wake, shifted by 0.1 rad: every ring's offset is that
+  const auto shifted = paper::wake_crossings(
+      grid, map([](double r) { return paper::wake_azimuth(r, 1.0, 0.05) + 0.1; }), 1.0, 0.05, 0.6, 1.6, 0.1, 0.3);
+  REQUIRE(shifted.size() == 80);
+  for (const auto& c : shifted) CHECK(std::abs(c.offset() - 0.1) <= resolution);
+  CHECK(paper::rms_offset(shifted) == Approx(0.1).margin(resolution));
+  // a crest that winds 30 % less than theory's: traced beyond the search window, its offset 0.3 of theory's turn
+  const auto open = paper::wake_crossings(grid, map([](double r) { return 0.7 * paper::wake_azimuth(r, 1.0, 0.05); }),
+                                          1.0, 0.05, 0.6, 1.6, 0.1, 0.3);
+  REQUIRE(open.size() == 80);
+  for (const auto& c : open) {
+    INFO("r = " << c.r);
+    CHECK(std::abs(std::remainder(c.offset() + 0.3 * paper::wake_azimuth(c.r, 1.0, 0.05), 2.0 * std::numbers::pi)) <=
+          resolution);
+  }
+  CHECK(std::abs(open.front().offset()) > 0.5);
+}
+
 TEST_CASE("planet disk: the initial lattice disk holds Sigma_0 and sits in equilibrium", "[examples][disk]") {
   scenes::PlanetDiskParams s;
   s.particles = 8000;

@@ -54,4 +54,61 @@ inline double wake_azimuth(double r, double a, double aspect) {
   return s / aspect * (std::log(x) - 2.0 / 3.0 * (x * std::sqrt(x) - 1.0));
 }
 
+/// Where a planet's wake crosses a ring of a Sigma map against linear theory: azimuths relative to the planet.
+struct WakeCrossing {
+  double r = 0.0, phi_theory = 0.0, phi_measured = 0.0;
+  /// phi_measured - phi_theory, wrapped into [-pi, pi].
+  double offset() const { return std::remainder(phi_measured - phi_theory, 2.0 * std::numbers::pi); }
+};
+
+/// The wake's crest on a Sigma map on `grid` (phi_0 the planet's azimuth), traced ring by ring away from the
+/// orbit a on both sides, over r_lo <= r <= r_hi and at least `clear` from the orbit (the planet's own well left
+/// out): on the first ring the largest Sigma within `window` radians of linear theory's wake (wake_azimuth), on
+/// each next ring the largest within `window` of the last crest moved on by theory's turn between the rings. A
+/// crest that winds less or more than theory's drifts from it ring by ring, as a massive planet's does.
+inline std::vector<WakeCrossing> wake_crossings(const PolarGrid& grid, const std::vector<double>& sigma, double a,
+                                                double aspect, double r_lo, double r_hi, double clear, double window) {
+  const double two_pi = 2.0 * std::numbers::pi;
+  std::vector<WakeCrossing> out;
+  auto trace = [&](std::ptrdiff_t first, std::ptrdiff_t step) {
+    double centre = 0.0, last_theory = 0.0;
+    bool started = false;
+    for (std::ptrdiff_t i = first; i >= 0 && i < static_cast<std::ptrdiff_t>(grid.n_r); i += step) {
+      const auto row = static_cast<std::size_t>(i);
+      const double r = grid.r(row);
+      if (r < r_lo || r > r_hi) break;
+      const double theory = wake_azimuth(r, a, aspect);
+      centre = started ? centre + (theory - last_theory) : theory;
+      last_theory = theory;
+      WakeCrossing c{r, std::remainder(theory, two_pi), 0.0};
+      double best = -1.0;
+      for (std::size_t j = 0; j < grid.n_phi; ++j) {
+        const double value = sigma[row * grid.n_phi + j];
+        if (std::abs(std::remainder(grid.phi(j) - centre, two_pi)) <= window && value > best) {
+          best = value;
+          c.phi_measured = grid.phi(j);
+        }
+      }
+      centre += std::remainder(c.phi_measured - centre, two_pi);
+      started = true;
+      out.push_back(c);
+    }
+  };
+  std::ptrdiff_t outer = 0, inner = -1;  // the first rings clear of the orbit on either side
+  while (outer < static_cast<std::ptrdiff_t>(grid.n_r) && grid.r(static_cast<std::size_t>(outer)) < a + clear) ++outer;
+  for (std::ptrdiff_t i = 0; i < static_cast<std::ptrdiff_t>(grid.n_r); ++i)
+    if (grid.r(static_cast<std::size_t>(i)) <= a - clear) inner = i;
+  if (inner >= 0) trace(inner, -1);
+  trace(outer, 1);
+  std::sort(out.begin(), out.end(), [](const WakeCrossing& x, const WakeCrossing& y) { return x.r < y.r; });
+  return out;
+}
+
+/// The root mean square of the crossings' offsets from theory (0 for none).
+inline double rms_offset(const std::vector<WakeCrossing>& crossings) {
+  double sum = 0.0;
+  for (const auto& c : crossings) sum += c.offset() * c.offset();
+  return crossings.empty() ? 0.0 : std::sqrt(sum / static_cast<double>(crossings.size()));
+}
+
 }  // namespace rsph::paper
