@@ -168,6 +168,48 @@ std::optional<Options> parse_options(int argc, char** argv) {
   return opt;
 }
 
+/// What a run measured at its end, beside the scene's DiskRun.
+struct FinalFigures {
+  WakeFit wake;
+  double thickness_initial = 0.0, thickness_final = 0.0;  ///< 3D only
+};
+
+/// summary.json's figures (the run record aside).
+io::Json disk_summary(const Options& opt, const scenes::DiskRun& r, const FinalFigures& f) {
+  const auto& s = opt.s;
+  io::Json phases = ex::phase_json(r.phases);
+  phases.set("measurement_and_output", r.output_seconds);
+  std::vector<io::Json> mass_over_time;
+  for (const auto& d : r.samples) {
+    io::Json j;
+    j.set("orbit", d.orbit).set("mass", d.mass).set("mass_removed", d.mass_removed).set("gap_depth", d.gap_depth);
+    mass_over_time.push_back(j);
+  }
+  io::Json summary;
+  summary.set("test", "planet_disk")
+      .set("dim", s.dim)
+      .set("kernel", opt.kernel)
+      .set("method", s.method)
+      .set("eos", s.eos)
+      .set("q", s.q);
+  if (s.rsph()) summary.set("remap", s.remap);
+  summary.set("max_bin", s.rsph() ? s.max_bin : 0);
+  summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
+  summary.set("lattice", s.dim == 3 ? (s.rsph() ? "cubic" : "columns") : s.lattice);
+  if (s.dim == 3) summary.set("surface_in_H", s.surface);
+  summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
+  summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);
+  summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final).set("mass_removed", r.mass_removed);
+  summary.set("mass_error", r.max_mass_error).set("gap_depth", r.samples.back().gap_depth);
+  summary.set("wake_rms_offset", f.wake.rms_offset).set("wake_crossings", static_cast<std::uint64_t>(f.wake.crossings));
+  summary.set("wall_seconds_per_orbit", r.wall_seconds / s.orbits);
+  if (s.dim == 3) summary.set("thickness_initial", f.thickness_initial).set("thickness_final", f.thickness_final);
+  ex::write_cost(summary, r);
+  summary.set("cpu_seconds", ex::cpu_seconds()).set("remap_seconds", r.remap_seconds);
+  summary.set("phase_seconds", phases).set("timeline", mass_over_time);
+  return summary;
+}
+
 int run(Options opt) {
   auto& [s, common, resolution, snapshot_every, map_nr, map_nphi, kernel] = opt;
   ex::apply_threads(common.threads);
@@ -215,36 +257,7 @@ int run(Options opt) {
   progress.finish();
   timeline.close();
 
-  io::Json phases = ex::phase_json(r.phases);
-  phases.set("measurement_and_output", r.output_seconds);
-  std::vector<io::Json> mass_over_time;
-  for (const auto& d : r.samples) {
-    io::Json j;
-    j.set("orbit", d.orbit).set("mass", d.mass).set("mass_removed", d.mass_removed).set("gap_depth", d.gap_depth);
-    mass_over_time.push_back(j);
-  }
-  io::Json summary;
-  summary.set("test", "planet_disk")
-      .set("dim", s.dim)
-      .set("kernel", kernel)
-      .set("method", s.method)
-      .set("eos", s.eos)
-      .set("q", s.q);
-  if (s.rsph()) summary.set("remap", s.remap);
-  summary.set("max_bin", s.rsph() ? s.max_bin : 0);
-  summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
-  summary.set("lattice", s.dim == 3 ? (s.rsph() ? "cubic" : "columns") : s.lattice);
-  if (s.dim == 3) summary.set("surface_in_H", s.surface);
-  summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
-  summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);
-  summary.set("mass_initial", r.mass_initial).set("mass_final", r.mass_final).set("mass_removed", r.mass_removed);
-  summary.set("mass_error", r.max_mass_error).set("gap_depth", r.samples.back().gap_depth);
-  summary.set("wake_rms_offset", wake.rms_offset).set("wake_crossings", static_cast<std::uint64_t>(wake.crossings));
-  summary.set("wall_seconds_per_orbit", r.wall_seconds / s.orbits);
-  if (s.dim == 3) summary.set("thickness_initial", thickness_initial).set("thickness_final", thickness_final);
-  ex::write_cost(summary, r);
-  summary.set("cpu_seconds", ex::cpu_seconds()).set("remap_seconds", r.remap_seconds);
-  summary.set("phase_seconds", phases).set("timeline", mass_over_time);
+  auto summary = disk_summary(opt, r, {wake, thickness_initial, thickness_final});
   ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
   ex::draw_figure(common, dir, "planet_disk");
