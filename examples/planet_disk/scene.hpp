@@ -255,15 +255,6 @@ inline void checkpoint_disk_run(io::Archive& ar, DiskRun& r) {
   ar("output_seconds", r.output_seconds);
 }
 
-/// x^2 + y^2: the squared distance from the centre (2D) or from the z axis (3D).
-template <int D>
-double in_plane_squared_norm(const Vec<D>& x) {
-  if constexpr (D == 2)
-    return x.squaredNorm();
-  else
-    return x.x() * x.x() + x.y() * x.y();
-}
-
 template <class Sim, class OnStep, class OnSample>
 DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample&& on_sample,
                  examples::Checkpoints* checkpoints) {
@@ -279,7 +270,7 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
     r.mass_removed += examples::remove_particles(
         sm,
         [&](const Vec<Sim::dim>& x) {
-          const double R2 = in_plane_squared_norm(x);
+          const double R2 = x.template head<2>().squaredNorm();  // from the centre, in 3D from the z axis
           return R2 < r_lo * r_lo || R2 > r_hi * r_hi;
         },
         r.particles_removed);

@@ -81,27 +81,27 @@ inline ParticleSet<3, false> flared_disk_lattice(const Box<3>& box, double spaci
                                                  double slope, const VerticalProfile& profile, double sigma0,
                                                  const paper::KeplerianZones& zones) {
   const lattice::Cubic lat{spacing};
-  const double z_max = slope * r_out;
-  const auto range = lat.cells_touching(box, Vec<3>(-r_out, -r_out, -z_max), Vec<3>(r_out, r_out, z_max));
+  Box<2> plane;  // the cubic lattice's columns are the square lattice's sites in the box's plane
+  plane.lo = box.lo.head<2>();
+  plane.hi = box.hi.head<2>();
+  const auto range = lat.cells_touching(box, Vec<3>(0.0, 0.0, -slope * r_out), Vec<3>(0.0, 0.0, slope * r_out));
   ParticleSet<3, false> p;
   std::vector<Vec<3>> column;
   std::vector<double> weight;
-  for (std::int64_t j = range.lo[1]; j <= range.hi[1]; ++j)
-    for (std::int64_t i = range.lo[0]; i <= range.hi[0]; ++i) {
-      column.clear();
-      weight.clear();
-      double total = 0.0;
-      for (std::int64_t k = range.lo[2]; k <= range.hi[2]; ++k) {
-        const Vec<3> x = lat.site(box, {i, j, k});
-        const double R = std::hypot(x.x(), x.y());
-        if (R < r_in || R > r_out || std::abs(x.z()) > slope * R) continue;
-        column.push_back(x);
-        weight.push_back(profile.density(x, sigma0));
-        total += weight.back();
-      }
-      for (std::size_t c = 0; c < column.size(); ++c)
-        p.add(sigma0 * spacing * spacing * weight[c] / total, column[c], zones.velocity(column[c]), h);
+  examples::for_each_site_in_annulus(lattice::Square{spacing}, plane, r_in, r_out, [&](const Vec<2>& xy, double) {
+    column.clear();
+    weight.clear();
+    double total = 0.0;
+    for (std::int64_t k = range.lo[2]; k <= range.hi[2]; ++k) {
+      const Vec<3> x(xy.x(), xy.y(), lat.site(box, {0, 0, k}).z());
+      if (std::abs(x.z()) > slope * xy.norm()) continue;
+      column.push_back(x);
+      weight.push_back(profile.density(x, sigma0));
+      total += weight.back();
     }
+    for (std::size_t c = 0; c < column.size(); ++c)
+      p.add(sigma0 * spacing * spacing * weight[c] / total, column[c], zones.velocity(column[c]), h);
+  });
   return p;
 }
 
