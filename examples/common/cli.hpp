@@ -1,6 +1,7 @@
 #pragma once
 // What every example shares: the common flags, the output folder, error reporting and exit codes.
 #include "common/levels.hpp"
+#include "common/ranks.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/io/atomic_file.hpp"
 
@@ -10,9 +11,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <exception>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <sstream>
 #include <string>
@@ -178,6 +181,10 @@ inline bool parse(int argc, char** argv, const po::options_description& desc, po
 
 /// Checks what the checkpoint flags were given.
 inline void check_checkpoint_flags(const CommonOptions& common) {
+  require(rank_count() == 1 || (common.checkpoint_every == 0.0 && common.max_wall == 0.0 && common.resume.empty()),
+          "checkpoints are written by one rank only, as yet: run without --checkpoint-every, --max-wall and "
+          "--resume on " +
+              std::to_string(rank_count()) + " ranks");
   require(common.checkpoint_every >= 0.0,
           "--checkpoint-every must be 0 or positive (got " + default_text(common.checkpoint_every) + ")");
   require(common.max_wall >= 0.0,
@@ -245,11 +252,16 @@ inline bool run_output(const std::filesystem::path& entry) {
 /// the simulation is built) leaves nothing behind: params.cfg goes, and the folder too when this run made it.
 class OutputFolder : public std::filesystem::path {
  public:
-  OutputFolder(std::filesystem::path dir, bool made, bool resumed)
-      : std::filesystem::path(std::move(dir)), made_(made), resumed_(resumed) {}
+  OutputFolder(std::filesystem::path dir, bool made, bool resumed, bool scratch = false)
+      : std::filesystem::path(std::move(dir)), made_(made), resumed_(resumed), scratch_(scratch) {}
   OutputFolder(const OutputFolder&) = delete;
   OutputFolder& operator=(const OutputFolder&) = delete;
   ~OutputFolder() {
+    if (scratch_) {
+      std::error_code ec;
+      std::filesystem::remove_all(*this, ec);
+      return;
+    }
     if (resumed_ || std::uncaught_exceptions() <= exceptions_) return;
     std::error_code ec;
     std::size_t others = 0;
@@ -260,7 +272,7 @@ class OutputFolder : public std::filesystem::path {
   }
 
  private:
-  bool made_, resumed_;
+  bool made_, resumed_, scratch_;
   int exceptions_ = std::uncaught_exceptions();
 };
 
@@ -269,6 +281,12 @@ class OutputFolder : public std::filesystem::path {
 /// `--config DIR/params.cfg` repeats the run.
 inline OutputFolder prepare_output(const CommonOptions& common) {
   check_checkpoint_flags(common);
+  if (!on_root()) {  // the other ranks' copies of the small files go to a folder of their own, removed after
+    const auto scratch = std::filesystem::temp_directory_path() /
+                         ("rsph-rank" + std::to_string(this_rank()) + "-" + std::to_string(::getpid()));
+    io::ensure_directory(scratch);
+    return {scratch, true, false, true};
+  }
   if (!common.resume.empty()) return {resume_output(common.resume), false, true};
   const std::filesystem::path dir(common.out);
   const bool made = !std::filesystem::exists(dir);
@@ -298,6 +316,11 @@ struct Stopped : std::runtime_error {
 /// 4 anything else, 5 stopped early with a checkpoint.
 inline int guarded_main(const char* program, const std::function<int()>& body) {
   try {
+#ifndef RSPH_WITH_MPI  // a program built for one process, started as one of many, would run many times over
+    require(!started_as_one_of_many(), std::string(program) +
+                                           " runs in one process: start it without mpiexec (or with -n 1); of the "
+                                           "programs, rsph-sedov runs on many ranks");
+#endif
     return body();
   } catch (const po::error& e) {
     fmt::print(stderr, "{}: error: {} (see --help)\n", program, e.what());
@@ -321,6 +344,8 @@ inline int guarded_main(const char* program, const std::function<int()>& body) {
 /// Errors become one message and an exit code (guarded_main).
 template <class Parse, class Run>
 int run_program(const char* program, int argc, char** argv, Parse&& parse, Run&& run) {
+  MpiSession mpi(argc, argv);
+  if (!on_root() && !std::freopen("/dev/null", "w", stdout)) return 4;  // rank 0 reports
   return guarded_main(program, [&] {
     const auto options = parse(argc, argv);
     return options ? run(*options) : 0;

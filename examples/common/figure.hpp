@@ -46,7 +46,7 @@ inline int run_process(const std::vector<std::string>& args, bool silent, bool q
 /// Draws the run's figure (see the header comment); `test` names the script, plot_<test>.py.
 inline void draw_figure(const CommonOptions& common, const std::filesystem::path& dir, const std::string& test) {
   const char* off = std::getenv("RSPH_NO_PLOT");
-  if (common.no_plot || (off && std::string(off) == "1")) return;
+  if (common.no_plot || (off && std::string(off) == "1") || !on_root()) return;
   if (std::string(RSPH_SCRIPTS_DIR).empty()) return;  // built without the scripts' folder: not the cwd's files
   const std::string python = "/usr/bin/python3";
   const auto script = std::filesystem::path(RSPH_SCRIPTS_DIR) / ("plot_" + test + ".py");

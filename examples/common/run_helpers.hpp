@@ -1,5 +1,6 @@
 #pragma once
 // Run-loop pieces every example shares: the conservation log and snapshot times.
+#include "common/ranks.hpp"
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/io/csv.hpp"
 #include "rsph/io/json.hpp"
@@ -94,7 +95,7 @@ struct RunCost {
   template <class Sim>
   void begin(const Sim& sim) {
     started_ = std::chrono::steady_clock::now();
-    particles_initial = sim.particles().n_real;
+    particles_initial = count_over_ranks(sim, sim.particles().n_real);
   }
   /// Wall seconds of the run so far, those before a resume included.
   double elapsed() const {
@@ -120,10 +121,12 @@ struct RunCost {
   template <class Sim>
   void finish(const Sim& sim) {
     wall_seconds = elapsed();
-    particles_final = sim.particles().n_real;
+    particles_final = count_over_ranks(sim, sim.particles().n_real);
     steps = sim.steps();
-    updates = sim.particle_updates();
-    mean_particles = steps > 0 ? particle_steps_ / static_cast<double>(steps) : 0.0;
+    updates = count_over_ranks(sim, sim.particle_updates());
+    std::array<double, 1> particle_steps{particle_steps_};  // of this rank's particles
+    sum_over_ranks(sim, particle_steps);
+    mean_particles = steps > 0 ? particle_steps[0] / static_cast<double>(steps) : 0.0;
     regularizations = sim.regularizations();
     phases = sim.phase_times();
   }

@@ -11,6 +11,7 @@
 #include "rsph/io/hdf5_snapshot.hpp"
 #include "rsph/io/json.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -111,9 +112,17 @@ class Snapshots {
   /// `units`: the scene's unit system, in words, for the snapshots' `units` attribute.
   explicit Snapshots(std::filesystem::path dir, std::string units = "dimensionless code units")
       : dir_(std::move(dir)), units_(std::move(units)) {}
+  /// On many ranks the particles are gathered to rank 0, which writes the file.
   template <class Sim>
   void write(const Sim& sim) {
-    io::write_snapshot(dir_ / io::snapshot_name(next_++), sim, units_);
+    const auto path = dir_ / io::snapshot_name(next_++);
+    if constexpr (Sim::distributed) {
+      const auto all = particles_on_root(sim);
+      if (on_root())
+        io::write_snapshot(path, all, sim.time(), sim.steps(), io::describe_run(sim.box(), sim.eos(), units_));
+    } else {
+      io::write_snapshot(path, sim, units_);
+    }
   }
   template <class Archive>
   void checkpoint(Archive& ar) {
@@ -143,6 +152,21 @@ inline void write_run_record(io::Json& summary, const CommonOptions& common) {
   summary.set("parameters", parameters).set("command_line", common.command_line).set("version", RSPH_VERSION);
 }
 
+/// How a decomposed run shared its work: ranks, the halo's size against the particles', the bytes the ranks sent
+/// each other per step, and the most wall seconds a rank spent communicating (or waiting for the others).
+template <class Sim>
+void write_ranks(io::Json& summary, const Sim& sim) {
+  const auto& d = sim.domain();
+  const auto& c = d.counts();
+  const double particles = static_cast<double>(d.sum(sim.particles().n_real));
+  summary.set("ranks", static_cast<std::uint64_t>(d.ranks()));
+  summary.set("halo_fraction", static_cast<double>(d.sum(c.halo_points)) / particles);
+  summary.set("remap_halo_fraction", static_cast<double>(d.sum(c.remap_halo_points)) / particles);
+  summary.set("bytes_sent_per_step", static_cast<double>(d.sum(c.bytes_sent)) / std::max<double>(1, sim.steps()));
+  summary.set("particles_migrated", d.sum(c.migrated)).set("partitions", c.partitions);
+  summary.set("communication_seconds", d.max(d.communication_seconds()));
+}
+
 /// What the scheme of `sim` did, where it has it: the remap's order (and, for the second, how often the limiter
 /// cut a gradient and how many old cells the thermal floor sent back to first order), the level counts of a
 /// multi-level lattice and the consistent-gradient solves.
@@ -155,6 +179,7 @@ void write_scheme(io::Json& summary, const Sim& sim) {
   if constexpr (requires { sim.regularizer().lattice().max_level; })
     summary.set("levels", level_counts(sim.regularizer().log(), sim.steps()));
   GradientSolves::of(sim).write_to(summary);
+  if constexpr (Sim::distributed) write_ranks(summary, sim);
 }
 
 }  // namespace rsph::examples

@@ -103,11 +103,15 @@ scenes::SedovRun run_sim(const Options& opt, const std::filesystem::path& dir, i
   return r;
 }
 
+/// Either method, on the ranks of mpiexec where built with MPI (ex::with_ranks).
 template <int D, class Kernel>
 scenes::SedovRun run_method(const Options& opt, const std::filesystem::path& dir, io::Json& scheme) {
-  if (opt.method == "sph") return run_sim<D>(opt, dir, scheme, scenes::make_sph_sedov<D, Kernel>(opt.s));
-  return ex::with_remap(opt.s.remap, [&](auto order) {
-    return run_sim<D>(opt, dir, scheme, scenes::make_rsph_sedov<D, Kernel>(opt.s, order));
+  return ex::with_ranks<D>([&](auto... domain) {
+    if (opt.method == "sph")
+      return run_sim<D>(opt, dir, scheme, scenes::make_sph_sedov<D, Kernel>(opt.s, std::move(domain)...));
+    return ex::with_remap(opt.s.remap, [&](auto order) {
+      return run_sim<D>(opt, dir, scheme, scenes::make_rsph_sedov<D, Kernel>(opt.s, order, std::move(domain)...));
+    });
   });
 }
 

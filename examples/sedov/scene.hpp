@@ -128,6 +128,8 @@ void measure(const Sim& sim, const SedovParams& s, SedovRun& r) {
     count[b] += 1.0;
     for (std::size_t c = 0; c < 7; ++c) sums[7 * b + c] += values[c];
   }
+  examples::sum_over_ranks(sim, count);
+  examples::sum_over_ranks(sim, sums);
   std::vector<double>* columns[] = {&r.r, &r.rho, &r.rho_exact, &r.v, &r.v_exact, &r.P, &r.P_exact};
   double l1 = 0.0;
   for (std::size_t b = 0; b < count.size(); ++b) {
@@ -154,23 +156,30 @@ void measure(const Sim& sim, const SedovParams& s, SedovRun& r) {
       P_centre_exact += exact.at(ra, t).P + s.P0;
     }
   }
+  std::array<double, D + 3> over_ranks;
+  for (int k = 0; k < D; ++k) over_ranks[static_cast<std::size_t>(k)] = momentum[k];
+  over_ranks[D] = scale, over_ranks[D + 1] = P_centre, over_ranks[D + 2] = P_centre_exact;
+  examples::sum_over_ranks(sim, over_ranks);
+  for (int k = 0; k < D; ++k) momentum[k] = over_ranks[static_cast<std::size_t>(k)];
+  scale = over_ranks[D], P_centre = over_ranks[D + 1], P_centre_exact = over_ranks[D + 2];
   r.central_pressure = P_centre_exact > 0.0 ? P_centre / P_centre_exact : 0.0;
   r.momentum = scale > 0.0 ? momentum.norm() / scale : 0.0;
 }
 
 }  // namespace detail
 
-template <int D, class Kernel>
+/// Extra: a domain decomposition for many ranks (examples::with_ranks), or nothing.
+template <int D, class Kernel, class... Extra>
 using SphSedov =
-    Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<D>>;
+    Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<D>, Extra...>;
 
 template <int D, class Kernel, class Order>
 using SedovRegularizer =
     regularize::LatticeRegularizer<lattice::Cartesian<D>, schedule::Adaptive<Kernel, D>,
                                    typename geometry::DefaultCellBuilder<D>::type, region::Unbounded, Order>;
-template <int D, class Kernel, class Order>
+template <int D, class Kernel, class Order, class... Extra>
 using RsphSedov =
-    Simulation<D, Kernel, eos::IdealGas, SedovRegularizer<D, Kernel, Order>, physics::ArtificialViscosity>;
+    Simulation<D, Kernel, eos::IdealGas, SedovRegularizer<D, Kernel, Order>, physics::ArtificialViscosity, Extra...>;
 
 inline TimeStepParams sedov_time_steps(const SedovParams& s) {
   TimeStepParams ts;
@@ -179,25 +188,26 @@ inline TimeStepParams sedov_time_steps(const SedovParams& s) {
   return ts;
 }
 
-template <int D, class Kernel>
-requires(D == 2 || D == 3) SphSedov<D, Kernel> make_sph_sedov(const SedovParams& s) {
+template <int D, class Kernel, class... Extra>
+requires(D == 2 || D == 3) SphSedov<D, Kernel, Extra...> make_sph_sedov(const SedovParams& s, Extra... extra) {
   s.validate();
   auto p = detail::sedov_particles<D, Kernel>(s, kernel::lattice_sum<Kernel, D>(s.h_over_dx));
-  return SphSedov<D, Kernel>(std::move(p), detail::sedov_box<D>(), eos::IdealGas{s.gamma}, regularize::None{},
-                             sedov_time_steps(s), physics::ArtificialViscosity{s.alpha, s.beta},
-                             physics::GradH<D>{s.h_over_dx});
+  return SphSedov<D, Kernel, Extra...>(std::move(p), detail::sedov_box<D>(), eos::IdealGas{s.gamma}, regularize::None{},
+                                       sedov_time_steps(s), physics::ArtificialViscosity{s.alpha, s.beta},
+                                       physics::GradH<D>{s.h_over_dx}, std::move(extra)...);
 }
 
-template <int D, class Kernel, class Order>
-requires(D == 2 || D == 3) RsphSedov<D, Kernel, Order> make_rsph_sedov(const SedovParams& s, Order order = {}) {
+template <int D, class Kernel, class Order, class... Extra>
+requires(D == 2 || D == 3) RsphSedov<D, Kernel, Order, Extra...> make_rsph_sedov(const SedovParams& s, Order order = {},
+                                                                                 Extra... extra) {
   s.validate();
   auto p = detail::sedov_particles<D, Kernel>(s, kernel::lattice_sum<Kernel, D>(s.h_over_dx));
   const double dx = 1.0 / s.side(D);
   auto schedule = schedule::Adaptive<Kernel, D>::for_h_over_dx(s.h_min, s.h_max, s.dN_max, s.max_steps);
-  return RsphSedov<D, Kernel, Order>(
+  return RsphSedov<D, Kernel, Order, Extra...>(
       std::move(p), detail::sedov_box<D>(), eos::IdealGas{s.gamma},
       SedovRegularizer<D, Kernel, Order>(lattice::Cartesian<D>{dx}, schedule, {.remap = {s.h_over_dx}, .order = order}),
-      sedov_time_steps(s), physics::ArtificialViscosity{s.alpha, s.beta});
+      sedov_time_steps(s), physics::ArtificialViscosity{s.alpha, s.beta}, std::move(extra)...);
 }
 
 /// The end time: when the exact shock reaches r_end.

@@ -88,6 +88,13 @@ class Simulation {
   using LoopScheme = physics::loops::Scheme<Kernel, D, has_energy, has_pressure, grad_h, corrected, has_stress>;
   /// The density pass also sums n_a of eq. (A1) when the regularizer's schedule uses it (fixed h only).
   static constexpr bool wants_number_density = !grad_h && requires { requires Reg::wants_number_density; };
+  /// Runs on the ranks of a communicator when a scene names a domain decomposition (mpi/decomposition.hpp).
+  static constexpr bool distributed = (DomainDecomposition<Terms, D> || ...);
+  static_assert((int(DomainDecomposition<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one decomposition");
+  static_assert(!distributed || regularize::remaps_on_ranks<Reg>(),
+                "this regularizer does not run on many ranks: its lattice depends on the whole gas (rings, levels)");
+  static_assert(!distributed || (!corrected && !has_stress),
+                "consistent gradients and viscous stress terms do not run on many ranks yet");
 
   Simulation(Particles particles, Box<D> box, EOS eos, Reg reg, TimeStepParams params, Terms... terms)
       : p_(std::move(particles)),
@@ -98,6 +105,10 @@ class Simulation {
         terms_(std::move(terms)...) {
     validate();
     if (p_.id.size() != p_.n_real) p_.renumber();  // a set written field by field (a remap at set-up)
+    if constexpr (distributed) {                   // every rank built the same set: each keeps its share
+      domain().distribute(p_);
+      rebalance();
+    }
     boundary::mark_zone_members<D>(terms_, p_);
     compute_rates();
   }
@@ -122,15 +133,31 @@ class Simulation {
   const CgResult& gradient_solve() const requires corrected { return cg_.last; }
   std::uint64_t gradient_solves() const requires corrected { return cg_.solves; }
   std::uint64_t gradient_solve_iterations() const requires corrected { return cg_.iterations; }
-  Conservation<D> totals() const { return conservation(p_); }
+  /// The conserved totals; over every rank, in the same bits at any rank count, when decomposed.
+  Conservation<D> totals() const {
+    if constexpr (distributed)
+      return domain().totals(p_);
+    else
+      return conservation(p_);
+  }
+  /// The decomposition a scene named (mpi/decomposition.hpp).
+  const auto& domain() const requires distributed {
+    return std::get<first_of_kind<sizeof...(Terms)>({DomainDecomposition<Terms, D>...})>(terms_);
+  }
 
-  /// The next time step: the Courant and force conditions over all real, integrated particles.
-  double time_step() const { return stable_time_step(p_, v_sig_, params_); }
+  /// The next time step: the Courant and force conditions over all real, integrated particles (all ranks').
+  double time_step() const {
+    if constexpr (distributed)
+      return domain().min(stable_time_step(p_, v_sig_, params_));
+    else
+      return stable_time_step(p_, v_sig_, params_);
+  }
 
   /// One kick-drift-kick leapfrog step of at most dt_limit (or a block of individual steps when
   /// TimeStepParams::max_bin > 0); regularizes afterwards when due. Returns the time advanced.
   double step(double dt_limit = std::numeric_limits<double>::infinity()) {
     if (params_.max_bin > 0) return block_step(std::min(dt_limit, time_to_regularization()));
+    if constexpr (distributed) rebalance();
     const double dt = std::min({time_step(), dt_limit, time_to_regularization()});
     check_time_step(dt, params_, time_);
     auto t0 = clock::now();
@@ -154,8 +181,12 @@ class Simulation {
     // members of zones that keep them sit the remap out, identities and all
     const bool keep = boundary::any_zone_keeps_members(terms_);
     auto kept = keep ? p_.take_if([&](std::size_t a) { return p_.frozen[a] != 0; }) : Particles{};
-    kinetic_removed_ += reg_.remap(p_, box_, step_info());
-    p_.renumber();  // every particle is new
+    if constexpr (distributed)
+      remap_on_ranks();
+    else {
+      kinetic_removed_ += reg_.remap(p_, box_, step_info());
+      p_.renumber();  // every particle is new
+    }
     if (keep) p_.append(kept);
     if constexpr (corrected) cg_.reset();  // new particles: solve afresh
     boundary::mark_zone_members<D>(terms_, p_, true);
@@ -172,6 +203,7 @@ class Simulation {
   /// the saved run would have: it rebuilds ghosts, neighbours and every other pass from these.
   template <class Archive>
   void checkpoint(Archive& ar) {
+    if constexpr (distributed) require(domain().ranks() == 1, "checkpoints are written by one rank only, as yet");
     const auto scope = ar.scope("simulation");
     p_.checkpoint(ar);
     ar("v_sig", v_sig_);
@@ -236,6 +268,66 @@ class Simulation {
   const auto& correction() const {
     return std::get<first_of_kind<sizeof...(Terms)>({GradientCorrection<Terms>...})>(terms_);
   }
+  auto& domain() requires distributed {
+    return std::get<first_of_kind<sizeof...(Terms)>({DomainDecomposition<Terms, D>...})>(terms_);
+  }
+
+  /// Moves particles between ranks when the decomposition says so, weighted by their neighbour counts, with
+  /// the per-particle state a step reads before its rates are evaluated again (signal speeds, d rho/dt).
+  void rebalance() requires distributed {
+    auto& d = domain();
+    if (d.ranks() == 1) return;
+    const std::size_t n = p_.n_real;
+    work_.assign(n, 1.0);
+    if (nl_.offset.size() == n + 1)
+      for (std::size_t a = 0; a < n; ++a) work_[a] += static_cast<double>(nl_.count(a));
+    v_sig_.resize(n);
+    drho_dt_.resize(n);
+    d.balance(p_, std::span<const double>(work_), v_sig_, drho_dt_);
+  }
+
+  /// The remap on many ranks: each rank remaps its own particles with those of other ranks out to the remap's
+  /// reach, keeps the new particles whose site its own gas held, and checks that the mass over all ranks is
+  /// what it was (a reach too short would lose or double some). One rank: the serial remap itself.
+  void remap_on_ranks() requires distributed {
+    auto& d = domain();
+    if (d.ranks() == 1) {
+      kinetic_removed_ += reg_.remap(p_, box_, step_info());
+      p_.renumber();
+      return;
+    }
+    const auto before = totals();
+    double h_max = 0.0;
+    for (std::size_t a = 0; a < p_.n_real; ++a) h_max = std::max(h_max, p_.h[a]);
+    h_max = d.max(h_max);
+    const std::size_t n_own = d.add_remap_halo(p_, box_, d.remap_reach_in_h() * h_max);
+    const auto old_x = p_.x;
+    const auto old_id = p_.id;
+    reg_.remap(p_, box_, step_info());
+    d.keep_owned_sites(p_, box_, old_x, old_id, n_own, Kernel::support * h_max);
+    const auto after = totals();
+    if (!(std::abs(after.mass - before.mass) <= 1e-12 * before.mass))
+      throw NumericalError("the remap on " + std::to_string(d.ranks()) + " ranks changed the mass by " +
+                           std::to_string(after.mass / before.mass - 1.0) + ": its reach is too short");
+    kinetic_removed_ += before.kinetic - after.kinetic;
+  }
+
+  /// After the pressure pass: the fields a later pass reads, on the halos of other ranks' particles, then on
+  /// the images made of them.
+  void refresh_halos() requires distributed {
+    auto& d = domain();
+    if (d.ranks() == 1) return;
+    d.refresh_halos(p_.rho);
+    d.refresh_halos(p_.P);
+    d.refresh_halos(p_.cs);
+    d.refresh_halos(p_.h);
+    if constexpr (has_energy) d.refresh_halos(p_.u);
+    if constexpr (grad_h) d.refresh_halos(gradh_.Omega);
+    boundary::refresh_ghosts(p_);
+    if constexpr (has_pressure)
+      for (std::size_t g = p_.n_real; g < p_.size_with_ghosts(); ++g)
+        P_over_rho2_[g] = p_.P[g] / (p_.rho[g] * p_.rho[g]);
+  }
 
   /// How long until a time-based schedule fires (infinite for others, or when it is already due).
   double time_to_regularization() const {
@@ -254,6 +346,8 @@ class Simulation {
     s.steps_since_last = since_.steps;
     s.time_since_last = since_.time;
     s.neighbors = &nl_;
+    if constexpr (distributed)
+      if (domain().ranks() > 1) s.refresh_halos = [&d = domain()](std::vector<double>& f) { d.refresh_halos(f); };
     if constexpr (wants_number_density) {
       s.number_density = nd_.n;
       if (nd_.pair_kernel_full) s.pair_kernel = nd_.pair_kernel;
@@ -271,7 +365,8 @@ class Simulation {
   /// After a step (or a block of them): the regularizer's turn, then the physical check.
   void finish_step() {
     const auto t0 = clock::now();
-    const bool due = reg_.due(p_, box_, step_info());  // an adaptive schedule's check is regularization cost too
+    bool due = reg_.due(p_, box_, step_info());  // an adaptive schedule's check is regularization cost too
+    if constexpr (distributed) due = domain().any(due);
     times_.regularization += seconds_since(t0);
     if (due) regularize_now();
     if (params_.check_every_step) check_physical();
@@ -309,7 +404,8 @@ class Simulation {
     for (int attempt = 0;; ++attempt) {
       build_neighbors(kHMargin);
       const auto t0 = clock::now();
-      const bool fits = physics::solve_density_and_h<Kernel, D>(h_solver(), p_, nl_, kHMargin, gradh_);
+      bool fits = physics::solve_density_and_h<Kernel, D>(h_solver(), p_, nl_, kHMargin, gradh_);
+      if constexpr (distributed) fits = domain().all(fits);
       times_.density += seconds_since(t0);
       if (fits) break;
       if (attempt == 4)
@@ -379,13 +475,17 @@ class Simulation {
       double h_max = 0.0;
 #pragma omp parallel for schedule(static) reduction(max : h_max)
       for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
+      if constexpr (distributed) h_max = domain().max(h_max);
       h_max_ = h_max;
       // Cells sized by the median h: particles with larger h search more cells (neighbor_list.hpp).
       h_scratch_.assign(p_.h.begin(), p_.h.begin() + static_cast<std::ptrdiff_t>(n));
       std::nth_element(h_scratch_.begin(), h_scratch_.begin() + static_cast<std::ptrdiff_t>(n / 2), h_scratch_.end());
-      h_median_ = h_scratch_[n / 2];
+      h_median_ = n > 0 ? h_scratch_[n / 2] : h_max;
     }
-    boundary::make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
+    if constexpr (distributed)
+      domain().make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
+    else
+      boundary::make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
     cells_.build(p_.x, 0.5 * Kernel::support * h_median_ * margin);
   }
 
@@ -402,6 +502,7 @@ class Simulation {
 
   void update_pressure() {
     physics::loops::update_pressure<D>(eos_, p_, P_over_rho2_);
+    if constexpr (distributed) refresh_halos();
     if constexpr (grad_h)
       for (std::size_t g = p_.n_real; g < p_.size_with_ghosts(); ++g)
         gradh_.Omega[g] = gradh_.Omega[p_.ghost_source[g - p_.n_real]];
@@ -413,6 +514,7 @@ class Simulation {
     require(params_.max_bin == 0 || (!grad_h && !has_stress),
             "individual time steps (max_bin > 0) need fixed smoothing lengths and no viscous stress term");
     require(params_.max_bin == 0 || !corrected, "consistent gradients need one global time step (max_bin = 0)");
+    require(params_.max_bin == 0 || !distributed, "individual time steps do not run on many ranks yet (max_bin = 0)");
     validate_policy(eos_);
     validate_policy(reg_);
     std::apply([&](const auto&... term) { (validate_policy(term), ...); }, terms_);
@@ -425,6 +527,9 @@ class Simulation {
 
   void check_physical() const {
     const auto [a, what] = first_unphysical(p_);
+    if constexpr (distributed)  // every rank stops together
+      if (domain().any(!what.empty()) && what.empty())
+        throw NumericalError("a particle of another rank became unphysical at t = " + std::to_string(time_));
     if (!what.empty())
       throw NumericalError("particle " + std::to_string(a) + ": " + what + " at t = " + std::to_string(time_) +
                            " (step " + std::to_string(step_) + ")");
@@ -441,6 +546,7 @@ class Simulation {
   neighbors::NeighborList nl_;
   std::vector<double> v_sig_, drho_dt_;
   std::vector<double> h_scratch_;
+  std::vector<double> work_;             ///< per particle: 1 + its neighbour count, the partition's weight (decomposed)
   double h_max_ = 0.0, h_median_ = 0.0;  ///< of the real particles at the last build_cells with h_fresh
   integrate::LeapfrogWorkspace<D, has_energy> leap_;
   integrate::BlockSteps<D, has_energy> blocks_;

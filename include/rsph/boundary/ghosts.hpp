@@ -14,8 +14,12 @@ namespace rsph::boundary {
 /// reversed) beyond its own face. Axes are processed in turn over real and earlier ghosts, so corners
 /// are covered. Ghosts copy their source's fields; refresh_ghosts updates them after a density sum.
 template <int D, bool E>
-void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
-  p.clear_ghosts();
+void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width);
+
+/// The images of make_ghosts, of every point already there (real particles, and ghosts another source put
+/// there before, such as particles of other ranks), appended after them.
+template <int D, bool E>
+void add_images(ParticleSet<D, E>& p, const Box<D>& box, double width) {
   for (int k = 0; k < D; ++k) {
     if (box.edge[k] == Edge::open) continue;
     const double lo = box.lo[k], hi = box.hi[k], L = hi - lo;
@@ -47,6 +51,12 @@ void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
       }
     }
   }
+}
+
+template <int D, bool E>
+void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
+  p.clear_ghosts();
+  add_images(p, box, width);
 }
 
 /// Copies the scalar fields a density sum changed from each ghost's real particle.

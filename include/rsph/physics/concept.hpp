@@ -2,11 +2,14 @@
 // The physics-term policy axis: what a Term may add to a simulation. Each term is one of these kinds;
 // the driver finds out which at compile time, so a term a scene does not name costs nothing.
 #include "rsph/core/dimension.hpp"
+#include "rsph/core/particle_set.hpp"
 #include "rsph/physics/pair.hpp"
 
 #include <array>
 #include <concepts>
 #include <cstddef>
+#include <span>
+#include <vector>
 
 namespace rsph {
 
@@ -70,9 +73,27 @@ concept GradientCorrection = requires(const T& t) {
   { t.every_step } -> std::convertible_to<bool>;
 };
 
+/// Runs the simulation on the ranks of a communicator (mpi/decomposition.hpp): it shares the particles out,
+/// brings other ranks' particles as halos with the ghosts, refreshes them after a pass and makes the ranks agree
+/// on time steps and checks. It names no MPI type, so the driver needs nothing of MPI.
+template <class T, int D>
+concept DomainDecomposition = requires(T& t, const T& c, ParticleSet<D, false>& p, const Box<D>& box,
+                                       std::vector<double>& f, std::span<const double> work) {
+  requires T::decomposes_domain;
+  t.distribute(p);
+  t.balance(p, work);
+  t.make_ghosts(p, box, 1.0);
+  t.refresh_halos(f);
+  { c.ranks() } -> std::convertible_to<int>;
+  { c.min(1.0) } -> std::same_as<double>;
+  { c.max(1.0) } -> std::same_as<double>;
+  { c.any(true) } -> std::same_as<bool>;
+  { c.all(true) } -> std::same_as<bool>;
+};
+
 template <class T, int D>
 concept Term = PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> ||
-    PrescribedMotion<T, D> || BoundaryZone<T, D> || GradientCorrection<T>;
+    PrescribedMotion<T, D> || BoundaryZone<T, D> || GradientCorrection<T> || DomainDecomposition<T, D>;
 
 /// Whether term T, if it names a dimension (`static constexpr int dim`), was made for dimension D.
 template <class T, int D>
@@ -101,7 +122,8 @@ constexpr bool check_term() {
                 "`void prescribe(size_t i, Vec<D>& x, Vec<D>& v, double t) const` (prescribed motion), or "
                 "`bool contains(const Vec<D>&) const` with `void advance(Vec<D>& x, Vec<D>& v, double dt) const` "
                 "(boundary zone), or `corrects_gradient` with `tolerance`, `max_iterations` and `every_step` "
-                "(consistent pair gradients)");
+                "(consistent pair gradients), or `decomposes_domain` with `distribute`, `balance`, `make_ghosts`, "
+                "`refresh_halos` and the reductions `ranks`, `min`, `max`, `any`, `all` (many ranks)");
   return true;
 }
 

@@ -6,7 +6,9 @@
 
 #include <concepts>
 #include <cstdint>
+#include <functional>
 #include <span>
+#include <vector>
 
 namespace rsph {
 
@@ -23,6 +25,9 @@ struct StepInfo {
   /// W_ab of each entry of `neighbors` as the density pass summed it, given with number_density (empty
   /// when that pass covered only some particles); so a schedule's pair sums need no distances of their own.
   std::span<const double> pair_kernel;
+  /// On many ranks (mpi/decomposition.hpp): fills a per-point field's halo entries from the ranks that own them,
+  /// given the field on the real particles and sized for every point; empty in one process.
+  std::function<void(std::vector<double>&)> refresh_halos;
 };
 
 /// A regularizer decides when (`due`) and remaps the particles onto a new set (`remap`) conserving
@@ -67,8 +72,19 @@ constexpr bool check_schedule() {
 
 namespace regularize {
 
+/// Whether regularizer R runs on many ranks (mpi/decomposition.hpp): one whose new lattice depends on the box
+/// alone, so that each rank can remap its part with its neighbours' particles (`remaps_on_ranks`).
+template <class R>
+constexpr bool remaps_on_ranks() {
+  if constexpr (requires { R::remaps_on_ranks; })
+    return R::remaps_on_ranks;
+  else
+    return false;
+}
+
 /// Plain SPH: never regularize.
 struct None {
+  static constexpr bool remaps_on_ranks = true;
   template <class P, class B>
   bool due(const P&, const B&, const StepInfo&) const {
     return false;

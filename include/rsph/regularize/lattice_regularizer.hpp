@@ -90,6 +90,9 @@ class LatticeRegularizer {
  public:
   /// The driver hands the schedule n_a of eq. (A1) from its density pass (StepInfo::number_density).
   static constexpr bool wants_number_density = requires { requires Schedule::wants_number_density; };
+  /// One regular lattice fixed by the box runs on many ranks; rings and multi-level lattices, whose sites
+  /// follow the whole gas, do not yet.
+  static constexpr bool remaps_on_ranks = RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice>;
 
   using Options = RegularizerOptions<Builder, Region, Order>;
 

@@ -117,6 +117,10 @@ struct Adaptive {
     } else {
       N = neighbour_numbers(p, nl);
     }
+    if (s.refresh_halos) {  // other ranks' particles among the neighbours: their N from their ranks
+      N.resize(p.size_with_ghosts());
+      s.refresh_halos(N);
+    }
     // m_b / rho_b N_b of every point, ghosts taking their source's N
     auto& volume_N = volume_N_;
     volume_N.resize(p.size_with_ghosts());

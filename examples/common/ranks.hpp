@@ -1,0 +1,114 @@
+#pragma once
+// The programs on many ranks. Built with MPI (RSPH_WITH_MPI, where CMake finds MPI and Zoltan), a program starts
+// and ends MPI itself (the library never does) and runs its scene's simulation with a domain decomposition
+// (mpi/decomposition.hpp) on every rank count, one rank being the serial run bit for bit. Every rank computes
+// the same figures (reductions); rank 0 writes the run's folder, snapshots gathered to it, while the other
+// ranks write their copies of the small files to a private temporary folder, removed at the end
+// (prepare_output), and print nothing. Built without MPI, nothing here does anything.
+#include "rsph/core/errors.hpp"
+
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdlib>
+#include <span>
+#include <utility>
+#ifdef RSPH_WITH_MPI
+#include "rsph/mpi/decomposition.hpp"
+#endif
+
+namespace rsph::examples {
+
+/// MPI for the program's lifetime (started here only if nobody has).
+class MpiSession {
+ public:
+  MpiSession(int& argc, char**& argv) {
+#ifdef RSPH_WITH_MPI
+    int started = 0;
+    MPI_Initialized(&started);
+    if (!started) {
+      MPI_Init(&argc, &argv);
+      owned_ = true;
+    }
+#else
+    (void)argc;
+    (void)argv;
+#endif
+  }
+  ~MpiSession() {
+#ifdef RSPH_WITH_MPI
+    if (owned_) MPI_Finalize();
+#endif
+  }
+  MpiSession(const MpiSession&) = delete;
+  MpiSession& operator=(const MpiSession&) = delete;
+
+ private:
+  bool owned_ = false;
+};
+
+/// Whether mpiexec started this process as one of several (its environment says so), for a program built
+/// without MPI, which then runs alone.
+inline bool started_as_one_of_many() {
+  for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "PMIX_SIZE"})
+    if (const char* v = std::getenv(name); v && std::atoi(v) > 1) return true;
+  return false;
+}
+
+/// This process's rank and the rank count (0 and 1 without MPI).
+inline int this_rank() {
+#ifdef RSPH_WITH_MPI
+  int r = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &r);
+  return r;
+#else
+  return 0;
+#endif
+}
+inline int rank_count() {
+#ifdef RSPH_WITH_MPI
+  int n = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &n);
+  return n;
+#else
+  return 1;
+#endif
+}
+inline bool on_root() { return this_rank() == 0; }
+
+/// f(domain) with the decomposition of the ranks, or f() without MPI: a scene's make_ function takes the
+/// decomposition as its last term.
+template <int D, class F>
+decltype(auto) with_ranks(F&& f) {
+#ifdef RSPH_WITH_MPI
+  return f(mpi::Decomposition<D>(MPI_COMM_WORLD));
+#else
+  return f();
+#endif
+}
+
+/// Sums `values` over the ranks when `sim` is decomposed (a measure made of sums over particles).
+template <class Sim, class Span>
+void sum_over_ranks(const Sim& sim, Span&& values) {
+  if constexpr (Sim::distributed) sim.domain().sum_in_place(std::span<double>(values));
+}
+
+/// A count summed over the ranks when `sim` is decomposed.
+template <class Sim>
+std::uint64_t count_over_ranks(const Sim& sim, std::uint64_t n) {
+  if constexpr (Sim::distributed)
+    return sim.domain().sum(n);
+  else
+    return n;
+}
+
+/// The particles of every rank on rank 0 (empty elsewhere), or the set itself in one process.
+template <class Sim>
+decltype(auto) particles_on_root(const Sim& sim) {
+  if constexpr (Sim::distributed)
+    return sim.domain().gather_on_root(sim.particles());
+  else
+    return (sim.particles());
+}
+
+}  // namespace rsph::examples

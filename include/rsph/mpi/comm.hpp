@@ -1,0 +1,180 @@
+#pragma once
+// Thin RAII wrappers over MPI's C API: a communicator the library is handed (it never initialises MPI),
+// typed reductions, and the one exchange pattern the decomposition uses, an all-to-all of typed spans.
+// Needs an MPI-3 implementation; link rsph::mpi.
+#include "rsph/core/errors.hpp"
+#include "rsph/core/exact_sum.hpp"
+
+#include <mpi.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace rsph::mpi {
+
+/// The MPI datatype of T; a type without one fails here with this sentence.
+template <class T>
+MPI_Datatype datatype() {
+  if constexpr (std::is_same_v<T, double>)
+    return MPI_DOUBLE;
+  else if constexpr (std::is_same_v<T, float>)
+    return MPI_FLOAT;
+  else if constexpr (std::is_same_v<T, int>)
+    return MPI_INT;
+  else if constexpr (std::is_same_v<T, std::int64_t>)
+    return MPI_INT64_T;
+  else if constexpr (std::is_same_v<T, std::uint64_t>)
+    return MPI_UINT64_T;
+  else if constexpr (std::is_same_v<T, std::uint32_t>)
+    return MPI_UINT32_T;
+  else if constexpr (std::is_same_v<T, std::uint8_t>)
+    return MPI_UINT8_T;
+  else if constexpr (std::is_same_v<T, char>)
+    return MPI_CHAR;
+  else
+    static_assert(sizeof(T) == 0, "this type has no MPI datatype: send its scalar components instead");
+}
+
+/// Throws when an MPI call failed (a duplicated communicator returns errors instead of aborting).
+inline void check(int rc, const char* what) {
+  if (rc == MPI_SUCCESS) return;
+  char text[MPI_MAX_ERROR_STRING];
+  int len = 0;
+  MPI_Error_string(rc, text, &len);
+  throw NumericalError(std::string("MPI: ") + what + " failed: " + std::string(text, static_cast<std::size_t>(len)));
+}
+
+/// A communicator: either borrowed (the caller's, left alone) or duplicated and freed on destruction, so that
+/// the library's messages never mix with the application's. Move-only.
+class Comm {
+ public:
+  /// Borrows `c`; the caller keeps it alive.
+  explicit Comm(MPI_Comm c = MPI_COMM_WORLD) : c_(c) {}
+  /// A private duplicate of `c`, freed with this object.
+  static Comm duplicate(MPI_Comm c) {
+    Comm d;
+    check(MPI_Comm_dup(c, &d.c_), "MPI_Comm_dup");
+    d.owned_ = true;
+    check(MPI_Comm_set_errhandler(d.c_, MPI_ERRORS_RETURN), "MPI_Comm_set_errhandler");
+    return d;
+  }
+  Comm(const Comm&) = delete;
+  Comm& operator=(const Comm&) = delete;
+  Comm(Comm&& o) noexcept : c_(o.c_), owned_(std::exchange(o.owned_, false)), seconds_(o.seconds_) {}
+  Comm& operator=(Comm&& o) noexcept {
+    if (this != &o) {
+      release();
+      c_ = o.c_;
+      owned_ = std::exchange(o.owned_, false);
+    }
+    return *this;
+  }
+  ~Comm() { release(); }
+
+  MPI_Comm get() const { return c_; }
+  int rank() const {
+    int r = 0;
+    MPI_Comm_rank(c_, &r);
+    return r;
+  }
+  int size() const {
+    int s = 1;
+    MPI_Comm_size(c_, &s);
+    return s;
+  }
+
+  /// Wall seconds spent in this communicator's calls so far: the messages, and the waits for other ranks.
+  double seconds() const { return seconds_; }
+
+  template <class T>
+  T all_reduce(T value, MPI_Op op) const {
+    const Timer t(seconds_);
+    T out{};
+    check(MPI_Allreduce(&value, &out, 1, datatype<T>(), op, c_), "MPI_Allreduce");
+    return out;
+  }
+  double min(double v) const { return all_reduce(v, MPI_MIN); }
+  double max(double v) const { return all_reduce(v, MPI_MAX); }
+  std::uint64_t sum(std::uint64_t v) const { return all_reduce(v, MPI_SUM); }
+  bool any(bool v) const { return all_reduce(int(v), MPI_LOR) != 0; }
+  bool all(bool v) const { return all_reduce(int(v), MPI_LAND) != 0; }
+
+  /// Element-wise sums of a span in place (integers: exact in any order).
+  template <class T>
+  void sum_in_place(std::span<T> values) const {
+    const Timer t(seconds_);
+    check(MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), datatype<T>(), MPI_SUM, c_),
+          "MPI_Allreduce");
+  }
+
+  /// Adds the ranks' partial sums, which must share their exponent; every rank gets the same bits.
+  void sum_in_place(ExactSum& s) const { sum_in_place(std::span<std::int64_t>(s.limbs())); }
+
+  /// One value from every rank, in rank order.
+  template <class T>
+  std::vector<T> all_gather(std::span<const T> mine) const {
+    const Timer t(seconds_);
+    std::vector<T> out(mine.size() * static_cast<std::size_t>(size()));
+    check(MPI_Allgather(mine.data(), static_cast<int>(mine.size()), datatype<T>(), out.data(),
+                        static_cast<int>(mine.size()), datatype<T>(), c_),
+          "MPI_Allgather");
+    return out;
+  }
+
+  /// All-to-all of variable counts: send[q] goes to rank q; returns what each rank sent here, concatenated in
+  /// rank order, with `counts` (per source rank) when asked for.
+  template <class T>
+  std::vector<T> exchange(const std::vector<std::vector<T>>& send, std::vector<int>* counts = nullptr) const {
+    const Timer t(seconds_);
+    const auto P = static_cast<std::size_t>(size());
+    std::vector<int> sc(P), sd(P), rc(P), rd(P);
+    std::vector<T> flat;
+    for (std::size_t q = 0; q < P; ++q) {
+      sd[q] = static_cast<int>(flat.size());
+      sc[q] = static_cast<int>(send[q].size());
+      flat.insert(flat.end(), send[q].begin(), send[q].end());
+    }
+    check(MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, c_), "MPI_Alltoall");
+    int total = 0;
+    for (std::size_t q = 0; q < P; ++q) {
+      rd[q] = total;
+      total += rc[q];
+    }
+    std::vector<T> recv(static_cast<std::size_t>(total));
+    check(MPI_Alltoallv(flat.data(), sc.data(), sd.data(), datatype<T>(), recv.data(), rc.data(), rd.data(),
+                        datatype<T>(), c_),
+          "MPI_Alltoallv");
+    if (counts) *counts = rc;
+    return recv;
+  }
+
+  void barrier() const {
+    const Timer t(seconds_);
+    check(MPI_Barrier(c_), "MPI_Barrier");
+  }
+
+ private:
+  /// Adds the wall time of its scope to a total.
+  struct Timer {
+    double& total;
+    double start = MPI_Wtime();
+    explicit Timer(double& t) : total(t) {}
+    ~Timer() { total += MPI_Wtime() - start; }
+    Timer(const Timer&) = delete;
+    Timer& operator=(const Timer&) = delete;
+  };
+  void release() {
+    if (owned_) MPI_Comm_free(&c_);
+    owned_ = false;
+  }
+  MPI_Comm c_;
+  bool owned_ = false;
+  mutable double seconds_ = 0.0;
+};
+
+}  // namespace rsph::mpi

@@ -1,0 +1,443 @@
+#pragma once
+// Domain decomposition of the SPH step over the ranks of a communicator. Each rank owns the real particles
+// of its part of the domain (Zoltan's partition, weighted by each particle's neighbour count); the particles
+// of other ranks that its own ones can reach come to it as ghosts (halos), with the periodic and mirror
+// images of make_ghosts made afterwards of real particles and halos alike; the fields a pass changes are
+// refreshed on the halos after it; time steps, schedules and checks agree through reductions.
+//
+// Which rank owns a particle never changes a result beyond round-off: a rank's halo holds every particle
+// within `width` of its own ones, whatever the cut, so the partition and the migration only move work.
+// On one rank every call is the serial code's: the same ghosts in the same order, so the same bits.
+#include "rsph/boundary/ghosts.hpp"
+#include "rsph/core/diagnostics.hpp"
+#include "rsph/core/exact_sum.hpp"
+#include "rsph/core/particle_set.hpp"
+#include "rsph/mpi/comm.hpp"
+#include "rsph/mpi/partition.hpp"
+#include "rsph/neighbors/cell_list.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace rsph::mpi {
+
+/// When the partition is recomputed, and how a set built alike on every rank is first shared out.
+struct DecompositionParams {
+  PartitionParams partition;
+  /// Recompute the partition when the largest rank's work passes this multiple of the mean, or every
+  /// `repartition_every` steps (particles drift away from their rank's part, its halo grows).
+  double rebalance_above = 1.1;
+  int repartition_every = 20;
+  /// How far, in the largest h, a rank's remap reaches into its neighbours' particles: an old cell's radius
+  /// (about 2h at most), the new cells it meets, the old cells those meet and whose cells they need (three
+  /// radii), and two lattice layers for the hand-on of nearly empty cells at the edge of what a rank sees.
+  double remap_reach_in_h = 12.0;
+  void validate() const {
+    partition.validate();
+    require(rebalance_above >= 1.0, "the decomposition's rebalance threshold must be at least 1");
+    require(repartition_every >= 1, "the decomposition must repartition at least every step count >= 1");
+    require(remap_reach_in_h > 0.0, "the decomposition's remap reach must be positive");
+  }
+};
+
+/// What the halo exchanges and migrations sent, for the scale measurements (docs/performance.md).
+struct ExchangeCounts {
+  std::uint64_t halo_points = 0;        ///< halos received at the last ghost build
+  std::uint64_t remap_halo_points = 0;  ///< other ranks' particles remapped with this rank's at the last remap
+  std::uint64_t bytes_sent = 0;         ///< since the start: halos, their refreshes, migrations
+  std::uint64_t migrated = 0;           ///< particles sent to another rank since the start
+  std::uint64_t partitions = 0;         ///< partitions computed
+};
+
+namespace detail {
+template <class T>
+struct Parts {
+  using Scalar = T;
+  static constexpr int n = 1;
+};
+template <int D>
+struct Parts<Vec<D>> {
+  using Scalar = double;
+  static constexpr int n = D;
+};
+}  // namespace detail
+
+/// The decomposition as a term of a Simulation (core/domain.hpp): a scene that names it runs on the ranks of
+/// its communicator; one that does not is unchanged.
+template <int D>
+class Decomposition {
+ public:
+  static constexpr bool decomposes_domain = true;
+  static constexpr int dim = D;
+
+  explicit Decomposition(MPI_Comm comm = MPI_COMM_WORLD, DecompositionParams params = {})
+      : comm_(std::make_shared<Comm>(Comm::duplicate(comm))), params_(std::move(params)) {
+    params_.validate();
+    if (comm_->size() > 1) partitioner_ = std::make_shared<Partitioner<D>>(comm_->get(), params_.partition);
+  }
+
+  const Comm& comm() const { return *comm_; }
+  int ranks() const { return comm_->size(); }
+  const ExchangeCounts& counts() const { return counts_; }
+  /// Wall seconds in MPI calls so far (messages, and waiting for the other ranks).
+  double communication_seconds() const { return comm_->seconds(); }
+  double remap_reach_in_h() const { return params_.remap_reach_in_h; }
+
+  double min(double v) const { return ranks() == 1 ? v : comm_->min(v); }
+  double max(double v) const { return ranks() == 1 ? v : comm_->max(v); }
+  bool any(bool v) const { return ranks() == 1 ? v : comm_->any(v); }
+  bool all(bool v) const { return ranks() == 1 ? v : comm_->all(v); }
+  std::uint64_t sum(std::uint64_t v) const { return ranks() == 1 ? v : comm_->sum(v); }
+
+  /// Keeps this rank's share of a set that every rank built alike (the same particles, identities and
+  /// order): a contiguous block of it; the first balance() then partitions it.
+  template <bool E>
+  void distribute(ParticleSet<D, E>& p) {
+    const auto P = static_cast<std::size_t>(ranks()), r = static_cast<std::size_t>(comm_->rank());
+    if (P == 1) return;
+    const std::size_t n = p.n_real, begin = n * r / P, end = n * (r + 1) / P;
+    p.erase_if([&](std::size_t a) { return a < begin || a >= end; });
+    due_ = true;
+  }
+
+  /// Recomputes the partition when it is due and moves the particles (their fields and the per-particle
+  /// arrays in `extra`, each of n_real entries) to their new ranks. work[a]: particle a's cost.
+  template <bool E, class... Extra>
+  void balance(ParticleSet<D, E>& p, std::span<const double> work, Extra&... extra) {
+    if (ranks() == 1) return;
+    ++steps_;
+    if (!due_ && steps_ < params_.repartition_every) {
+      double mine = 0.0;
+      for (double w : work) mine += w;
+      const double most = comm_->max(mine), mean = static_cast<double>(comm_->all_reduce(mine, MPI_SUM)) / ranks();
+      if (!(most > params_.rebalance_above * mean)) return;
+    }
+    p.clear_ghosts();
+    std::vector<double> unit;
+    if (work.size() != p.n_real) {  // no measured work yet (the first partition): every particle alike
+      unit.assign(p.n_real, 1.0);
+      work = unit;
+    }
+    const auto dest = partitioner_->destinations(std::span<const Vec<D>>(p.x.data(), p.n_real),
+                                                 std::span<const std::uint64_t>(p.id), work, comm_->rank());
+    ++counts_.partitions;
+    migrate(p, dest, extra...);
+    steps_ = 0;
+    due_ = false;
+  }
+
+  /// Sends every real particle a with dest[a] != this rank there, every field and identity with it, and the
+  /// entries of the per-particle arrays `extra`; the staying ones keep their order, the arrivals follow in
+  /// rank order.
+  template <bool E, class... Extra>
+  void migrate(ParticleSet<D, E>& p, const std::vector<int>& dest, Extra&... extra) {
+    p.clear_ghosts();
+    const int me = comm_->rank();
+    Lists out(static_cast<std::size_t>(ranks()));
+    std::vector<std::uint32_t> stay;
+    for (std::size_t a = 0; a < p.n_real; ++a)
+      (dest[a] == me ? stay : out[static_cast<std::size_t>(dest[a])]).push_back(static_cast<std::uint32_t>(a));
+    counts_.migrated += p.n_real - stay.size();
+    const auto move = [&](auto& f) { f = concat(gather(f, stay), send(f, out)); };
+    move(p.m), move(p.rho), move(p.h), move(p.P), move(p.cs), move(p.x), move(p.v), move(p.dv_dt);
+    if constexpr (E) move(p.u), move(p.du_dt);
+    move(p.frozen), move(p.id);
+    (move(extra), ...);
+    p.n_real = p.x.size();
+    p.next_id = comm_->all_reduce(p.next_id, MPI_MAX);
+  }
+
+  /// The ghosts of every point this rank needs: the real particles of other ranks within `width` of its own
+  /// (across periodic faces too), appended first, then the periodic and mirror images of boundary::add_images
+  /// of real particles and halos. One rank: boundary::make_ghosts itself.
+  template <bool E>
+  void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
+    p.clear_ghosts();
+    if (ranks() > 1) receive_halos(p, box, width);
+    counts_.halo_points = halo_count_;
+    boundary::add_images(p, box, width);
+  }
+
+  /// After a pass has changed field f on the real particles: its values on this rank's halos.
+  template <class T>
+  void refresh_halos(std::vector<T>& f) const {
+    if (ranks() == 1) return;
+    const auto in = send(f, halo_send_);
+    std::copy(in.begin(), in.end(), f.begin() + static_cast<std::ptrdiff_t>(halo_first_));
+  }
+
+  /// Before a remap: the real particles of other ranks within `width` of this rank's own, appended after them
+  /// as real particles (fields and identities), so that the remap of this local set builds exactly every old
+  /// cell that meets a new cell this rank keeps. Returns how many are this rank's own (the first ones).
+  template <bool E>
+  std::size_t add_remap_halo(ParticleSet<D, E>& p, const Box<D>& box, double width) {
+    const std::size_t n_own = p.n_real;
+    if (ranks() == 1) return n_own;
+    receive_halos(p, box, width);  // as ghosts first, then made real
+    counts_.remap_halo_points = halo_count_;
+    p.id.resize(n_own);
+    p.id.insert(p.id.end(), halo_count_, 0);
+    const auto ids = send(std::vector<std::uint64_t>(p.id.begin(), p.id.begin() + n_own), halo_send_);
+    std::copy(ids.begin(), ids.end(), p.id.begin() + static_cast<std::ptrdiff_t>(n_own));
+    p.n_real = p.x.size();
+    p.ghost_source.clear();
+    return n_own;
+  }
+
+  /// After the remap of the local set: keeps the new particles whose site's nearest old particle (old_x, old_id,
+  /// this rank's own the first n_own; ties to the lower identity) was this rank's, so that every site is kept by
+  /// exactly one rank, the one that held the gas there. They are numbered after all ranks' particles so far, rank
+  /// by rank (on one rank as the serial run numbers them).
+  template <bool E>
+  void keep_owned_sites(ParticleSet<D, E>& p, const Box<D>& box, const std::vector<Vec<D>>& old_x,
+                        const std::vector<std::uint64_t>& old_id, std::size_t n_own, double reach);
+
+  /// New identities for the real particles, after every rank's earlier ones and rank by rank.
+  template <bool E>
+  void renumber(ParticleSet<D, E>& p) const {
+    std::uint64_t first = 0, mine = p.n_real;
+    if (ranks() > 1) check(MPI_Exscan(&mine, &first, 1, MPI_UINT64_T, MPI_SUM, comm_->get()), "MPI_Exscan");
+    if (comm_->rank() == 0) first = 0;
+    const std::uint64_t total = sum(mine);
+    p.next_id += first;
+    p.renumber();
+    p.next_id += total - first - mine;
+  }
+
+  /// Element-wise sums over the ranks (MPI's order: the last bits may depend on the rank count).
+  void sum_in_place(std::span<double> values) const {
+    if (ranks() > 1) comm_->sum_in_place(values);
+  }
+
+  /// Every rank's real particles on rank 0, in rank order (fields and identities; rates left out), and an
+  /// empty set on the others: for output, which rank 0 writes alone.
+  template <bool E>
+  ParticleSet<D, E> gather_on_root(const ParticleSet<D, E>& p) const {
+    Lists to_root(static_cast<std::size_t>(ranks()));
+    for (std::size_t a = 0; a < p.n_real; ++a) to_root[0].push_back(static_cast<std::uint32_t>(a));
+    ParticleSet<D, E> all;
+    all.m = send(p.m, to_root);
+    all.x = send(p.x, to_root);
+    all.v = send(p.v, to_root);
+    all.h = send(p.h, to_root);
+    all.rho = send(p.rho, to_root);
+    all.P = send(p.P, to_root);
+    all.cs = send(p.cs, to_root);
+    if constexpr (E) all.u = send(p.u, to_root);
+    all.frozen = send(p.frozen, to_root);
+    all.id = send(p.id, to_root);
+    all.n_real = all.x.size();
+    all.dv_dt.assign(all.n_real, Vec<D>::Zero());
+    if constexpr (E) all.du_dt.assign(all.n_real, 0.0);
+    all.next_id = p.next_id;
+    return all;
+  }
+
+  /// Mass, momentum, angular momentum and energies over every rank's real particles, the same bits at any
+  /// rank count (ExactSum).
+  template <bool E>
+  Conservation<D> totals(const ParticleSet<D, E>& p) const;
+
+ private:
+  using Lists = std::vector<std::vector<std::uint32_t>>;
+
+  template <bool E>
+  void receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width);
+
+  template <class T>
+  static std::vector<T> gather(const std::vector<T>& f, const std::vector<std::uint32_t>& which) {
+    std::vector<T> g;
+    g.reserve(which.size());
+    for (auto a : which) g.push_back(f[a]);
+    return g;
+  }
+  template <class T>
+  static std::vector<T> concat(std::vector<T> a, const std::vector<T>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  }
+
+  /// f[a] for every a of lists[q], to rank q; what the other ranks sent here, in rank order.
+  template <class T>
+  std::vector<T> send(const std::vector<T>& f, const Lists& lists) const {
+    using S = typename detail::Parts<T>::Scalar;
+    constexpr int k = detail::Parts<T>::n;
+    std::vector<std::vector<S>> out(lists.size());
+    for (std::size_t q = 0; q < lists.size(); ++q) {
+      out[q].reserve(lists[q].size() * k);
+      for (auto a : lists[q]) {
+        if constexpr (k == 1)
+          out[q].push_back(f[a]);
+        else
+          for (int j = 0; j < k; ++j) out[q].push_back(f[a][j]);
+      }
+      counts_.bytes_sent += out[q].size() * sizeof(S);
+    }
+    const auto in = comm_->exchange(out);
+    std::vector<T> r(in.size() / k);
+    for (std::size_t i = 0; i < r.size(); ++i) {
+      if constexpr (k == 1)
+        r[i] = in[i];
+      else
+        for (int j = 0; j < k; ++j) r[i][j] = in[k * i + static_cast<std::size_t>(j)];
+    }
+    return r;
+  }
+
+  std::shared_ptr<Comm> comm_;  // shared: a Simulation copies its terms
+  DecompositionParams params_;
+  std::shared_ptr<Partitioner<D>> partitioner_;
+  bool due_ = true;
+  int steps_ = 0;
+  Lists halo_send_;  ///< per rank: the real particles whose halos it holds, in the order it holds them
+  std::size_t halo_first_ = 0, halo_count_ = 0;
+  mutable ExchangeCounts counts_;
+};
+
+/// Does a point at x, or one of its periodic images, lie within the box [lo, hi]?
+template <int D>
+bool reaches(const Vec<D>& x, const Vec<D>& lo, const Vec<D>& hi, const Box<D>& box, double width) {
+  for (int k = 0; k < D; ++k) {
+    if (!box.periodic(k)) {
+      if (x[k] < lo[k] || x[k] > hi[k]) return false;
+      continue;
+    }
+    const double L = box.hi[k] - box.lo[k];
+    const int reach = static_cast<int>(std::ceil(width / L)) + 1;
+    bool any = false;
+    for (int s = -reach; s <= reach && !any; ++s) any = x[k] + s * L >= lo[k] && x[k] + s * L <= hi[k];
+    if (!any) return false;
+  }
+  return true;
+}
+
+template <int D>
+template <bool E>
+void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width) {
+  // each rank's reach: the bounds of its real particles, widened by `width` (empty for a rank without any)
+  std::vector<double> mine(2 * D);
+  for (int k = 0; k < D; ++k) {
+    mine[k] = std::numeric_limits<double>::infinity();
+    mine[D + k] = -std::numeric_limits<double>::infinity();
+  }
+  for (std::size_t a = 0; a < p.n_real; ++a)
+    for (int k = 0; k < D; ++k) {
+      mine[k] = std::min(mine[k], p.x[a][k] - width);
+      mine[D + k] = std::max(mine[D + k], p.x[a][k] + width);
+    }
+  const auto all = comm_->all_gather(std::span<const double>(mine));
+  const int me = comm_->rank();
+  halo_send_.assign(static_cast<std::size_t>(ranks()), {});
+  for (int q = 0; q < ranks(); ++q) {
+    if (q == me) continue;
+    Vec<D> lo, hi;
+    for (int k = 0; k < D; ++k) {
+      lo[k] = all[2 * D * q + k];
+      hi[k] = all[2 * D * q + D + k];
+    }
+    for (std::size_t a = 0; a < p.n_real; ++a)
+      if (reaches<D>(p.x[a], lo, hi, box, width)) halo_send_[static_cast<std::size_t>(q)].push_back(std::uint32_t(a));
+  }
+  const auto x = send(p.x, halo_send_);
+  halo_first_ = p.n_real;
+  halo_count_ = x.size();
+  const auto put = [&](auto& f, const auto& values) {
+    f.resize(halo_first_);
+    f.insert(f.end(), values.begin(), values.end());
+  };
+  put(p.x, x);
+  put(p.v, send(p.v, halo_send_));
+  put(p.m, send(p.m, halo_send_));
+  put(p.h, send(p.h, halo_send_));
+  put(p.rho, send(p.rho, halo_send_));
+  put(p.P, send(p.P, halo_send_));
+  put(p.cs, send(p.cs, halo_send_));
+  put(p.frozen, send(p.frozen, halo_send_));
+  p.dv_dt.resize(p.x.size(), Vec<D>::Zero());
+  if constexpr (E) {
+    put(p.u, send(p.u, halo_send_));
+    p.du_dt.resize(p.x.size(), 0.0);
+  }
+  for (std::size_t g = 0; g < halo_count_; ++g) p.ghost_source.push_back(std::uint32_t(halo_first_ + g));
+}
+
+template <int D>
+template <bool E>
+void Decomposition<D>::keep_owned_sites(ParticleSet<D, E>& p, const Box<D>& box, const std::vector<Vec<D>>& old_x,
+                                        const std::vector<std::uint64_t>& old_id, std::size_t n_own, double reach) {
+  if (ranks() > 1) {
+    // the old points and their periodic images near the faces, each with the index of its particle
+    std::vector<Vec<D>> pts(old_x);
+    std::vector<std::uint32_t> of(old_x.size());
+    for (std::size_t i = 0; i < of.size(); ++i) of[i] = static_cast<std::uint32_t>(i);
+    for (int k = 0; k < D; ++k) {
+      if (!box.periodic(k)) continue;
+      const double L = box.hi[k] - box.lo[k];
+      const std::size_t n = pts.size();
+      for (std::size_t i = 0; i < n; ++i)
+        for (double s : {-L, L}) {
+          Vec<D> y = pts[i];
+          y[k] += s;
+          if (y[k] >= box.lo[k] - reach && y[k] <= box.hi[k] + reach) {
+            pts.push_back(y);
+            of.push_back(of[i]);
+          }
+        }
+    }
+    neighbors::CellList<D> cells;
+    cells.build(pts, reach);
+    const auto owned = [&](const Vec<D>& site) {
+      for (double r = reach;; r *= 2.0) {
+        double best = std::numeric_limits<double>::infinity();
+        std::size_t who = old_x.size();
+        cells.for_each_within(site, r, [&](std::uint32_t j) {
+          const double d2 = (pts[j] - site).squaredNorm();
+          const std::size_t o = of[j];
+          if (d2 < best || (d2 == best && who < old_x.size() && old_id[o] < old_id[who])) best = d2, who = o;
+        });
+        if (who < old_x.size() && best <= r * r) return who < n_own;
+        require(r < 1e6 * reach, "regularization: a new site has no old particle near it");
+      }
+    };
+    p.erase_if([&](std::size_t a) { return !owned(p.x[a]); });
+  }
+  renumber(p);
+}
+
+template <int D>
+template <bool E>
+Conservation<D> Decomposition<D>::totals(const ParticleSet<D, E>& p) const {
+  // one scale for all ranks: the largest magnitude of each sum's terms
+  constexpr int n_sums = 4 + D;
+  std::vector<std::vector<double>> terms(n_sums);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    terms[0].push_back(p.m[a]);
+    for (int k = 0; k < D; ++k) terms[1 + k].push_back(p.m[a] * p.v[a][k]);
+    if constexpr (D >= 2) terms[1 + D].push_back(p.m[a] * (p.x[a][0] * p.v[a][1] - p.x[a][1] * p.v[a][0]));
+    terms[2 + D].push_back(0.5 * p.m[a] * p.v[a].squaredNorm());
+    if constexpr (E) terms[3 + D].push_back(p.m[a] * p.u[a]);
+  }
+  std::vector<double> sums(n_sums);
+  for (int i = 0; i < n_sums; ++i) {
+    double largest = 0.0;
+    for (double t : terms[i]) largest = std::max(largest, std::abs(t));
+    ExactSum s(ExactSum::exponent_for(max(largest)));
+    for (double t : terms[i]) s.add(t);
+    if (ranks() > 1) comm_->sum_in_place(s);
+    sums[i] = s.value();
+  }
+  Conservation<D> c;
+  c.mass = sums[0];
+  for (int k = 0; k < D; ++k) c.momentum[k] = sums[1 + k];
+  c.angular_momentum = sums[1 + D];
+  c.kinetic = sums[2 + D];
+  c.thermal = sums[3 + D];
+  return c;
+}
+
+}  // namespace rsph::mpi

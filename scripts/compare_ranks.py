@@ -1,0 +1,105 @@
+#!/usr/bin/python3
+"""Runs one program at several rank counts and checks that the answers do not depend on the count: the integer
+results (particles, steps, regularizations) equal, the headline figures of summary.json equal to 1e-8 relative,
+and every field of every particle of the last snapshot equal to 1e-10 relative to the field's largest value,
+particles matched by identity (plain SPH) or by position (after a remap, whose new particles are numbered rank
+by rank). Exit status 0 when all agree, 1 otherwise.
+
+  compare_ranks.py --ranks 1,2,4 --figures shock_radius,peak_density -- build/bin/rsph-sedov --preset quick --dim 2
+"""
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+import h5py
+import numpy as np
+
+ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1", "OMPI_MCA_rmaps_base_oversubscribe": "1",
+       "OMPI_MCA_btl_vader_single_copy_mechanism": "none", "OMP_NUM_THREADS": "1"}
+INTEGERS = ("particles", "steps", "regularizations")
+FIELDS = ("x", "v", "m", "rho", "h", "P", "u")
+
+
+def run(mpiexec, ranks, cmd, out):
+    env = dict(os.environ, **ENV)
+    full = [mpiexec, "-n", str(ranks)] + cmd + ["--out", out, "--overwrite", "--no-plot", "--quiet"]
+    proc = subprocess.run(full, capture_output=True, text=True, env=env)
+    if proc.returncode != 0:
+        sys.exit(f"{' '.join(full)} failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
+    with open(os.path.join(out, "summary.json")) as f:
+        return json.load(f)
+
+
+def last_snapshot(folder):
+    names = sorted(n for n in os.listdir(folder) if n.startswith("snap_") and n.endswith(".h5"))
+    with h5py.File(os.path.join(folder, names[-1]), "r") as f:
+        fields = {k: np.array(f[k]) for k in FIELDS + ("id",) if k in f}
+    fields["id"] = fields["id"].reshape(-1)
+    return fields
+
+
+def matched(a, b, by_id):
+    """b's rows in the order of a's particles."""
+    if by_id:
+        where = {i: k for k, i in enumerate(b["id"])}
+        return np.array([where[i] for i in a["id"]])
+    order = []
+    for x in a["x"]:
+        order.append(int(np.argmin(((b["x"] - x) ** 2).sum(axis=1))))
+    return np.array(order)
+
+
+def compare(reference, other, ranks, figures, by_id):
+    problems = []
+    for key in INTEGERS:
+        if key in reference[0] and reference[0][key] != other[0][key]:
+            problems.append(f"{key}: {reference[0][key]} on 1 rank, {other[0][key]} on {ranks}")
+    for key in figures:
+        r, o = reference[0][key], other[0][key]
+        if abs(o - r) > 1e-8 * max(abs(r), 1e-300):
+            problems.append(f"{key}: {r!r} on 1 rank, {o!r} on {ranks} ({abs(o - r) / abs(r):.2e} relative)")
+    a, b = reference[1], other[1]
+    if len(a["x"]) != len(b["x"]):
+        return problems + [f"the last snapshot holds {len(a['x'])} particles on 1 rank, {len(b['x'])} on {ranks}"]
+    rows = matched(a, b, by_id)
+    worst = 0.0
+    for f in FIELDS:
+        if f in a:
+            scale = max(np.abs(a[f]).max(), 1e-300)
+            worst = max(worst, float(np.abs(a[f] - b[f][rows]).max() / scale))
+    print(f"{ranks} ranks: largest field difference {worst:.2e} of the field's scale; figures " +
+          ", ".join(f"{k} {other[0][k]!r}" for k in figures))
+    if worst > 1e-10:
+        problems.append(f"a field differs by {worst:.2e} of its scale on {ranks} ranks")
+    return problems
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--mpiexec", default="mpiexec")
+    ap.add_argument("--ranks", default="1,2,4")
+    ap.add_argument("--figures", default="", help="summary.json figures that must agree to 1e-8")
+    ap.add_argument("--by-id", action="store_true", help="match particles by identity (no remap numbers them anew)")
+    ap.add_argument("cmd", nargs=argparse.REMAINDER)
+    a = ap.parse_args()
+    cmd = a.cmd[1:] if a.cmd and a.cmd[0] == "--" else a.cmd
+    figures = [f for f in a.figures.split(",") if f]
+    counts = [int(r) for r in a.ranks.split(",")]
+    with tempfile.TemporaryDirectory() as tmp:
+        results = {}
+        for n in counts:
+            out = os.path.join(tmp, f"ranks{n}")
+            results[n] = (run(a.mpiexec, n, cmd, out), last_snapshot(out))
+        problems = []
+        for n in counts[1:]:
+            problems += compare(results[counts[0]], results[n], n, figures, a.by_id)
+    for p in problems:
+        print("differs:", p)
+    sys.exit(1 if problems else 0)
+
+
+if __name__ == "__main__":
+    main()
