@@ -312,9 +312,28 @@ struct Stopped : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// OpenMP threads that wait at a barrier sleep instead of spinning: a thread that spins while its partner waits
+/// for a core another process holds makes every parallel region wait a time slice, and a run on two threads
+/// then takes 1.7x as long as on one (docs/performance.md). The OpenMP runtime reads OMP_WAIT_POLICY when it
+/// loads, before main, so the program starts itself again with it set, unless it was set (by the user, or by
+/// this) already.
+inline void wait_passively() {
+  if (std::getenv("OMP_WAIT_POLICY")) return;
+  setenv("OMP_WAIT_POLICY", "PASSIVE", 1);
+  std::ifstream in("/proc/self/cmdline", std::ios::binary);
+  std::vector<std::string> args;
+  for (std::string a; std::getline(in, a, '\0');) args.push_back(a);
+  if (args.empty()) return;
+  std::vector<char*> argv;
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  execv("/proc/self/exe", argv.data());  // returns only on failure: then run as we are
+}
+
 /// Runs body() and turns errors into one message and an exit code: 2 bad input, 3 numerical failure,
 /// 4 anything else, 5 stopped early with a checkpoint.
 inline int guarded_main(const char* program, const std::function<int()>& body) {
+  wait_passively();
   try {
 #ifndef RSPH_WITH_MPI  // a program built for one process, started as one of many, would run many times over
     require(!started_as_one_of_many(), std::string(program) +
@@ -344,6 +363,7 @@ inline int guarded_main(const char* program, const std::function<int()>& body) {
 /// Errors become one message and an exit code (guarded_main).
 template <class Parse, class Run>
 int run_program(const char* program, int argc, char** argv, Parse&& parse, Run&& run) {
+  wait_passively();  // before MPI starts
   MpiSession mpi(argc, argv);
   if (!on_root() && !std::freopen("/dev/null", "w", stdout)) return 4;  // rank 0 reports
   return guarded_main(program, [&] {

@@ -473,7 +473,7 @@ class Simulation {
     const std::size_t n = p_.n_real;
     if (h_fresh) {
       double h_max = 0.0;
-#pragma omp parallel for schedule(static) reduction(max : h_max)
+#pragma omp parallel for schedule(static) reduction(max : h_max) if (n >= kParallelMin)
       for (std::size_t a = 0; a < n; ++a) h_max = std::max(h_max, p_.h[a]);
       if constexpr (distributed) h_max = domain().max(h_max);
       h_max_ = h_max;

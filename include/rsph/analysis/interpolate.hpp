@@ -2,6 +2,7 @@
 // SPH interpolation of the density at arbitrary points, for measurements on snapshots (disk maps, interfaces).
 #include "rsph/boundary/ghosts.hpp"
 #include "rsph/core/dimension.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/kernel/kernel.hpp"
 #include "rsph/neighbors/cell_list.hpp"
 
@@ -26,7 +27,7 @@ std::vector<double> interpolate_density(const Particles& p, const std::vector<Ve
   cells.build(x, reach);
   std::vector<double> sigma(points.size(), 0.0);
   const auto n = static_cast<std::ptrdiff_t>(points.size());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= std::ptrdiff_t(kParallelMin))
   for (std::ptrdiff_t i = 0; i < n; ++i) {
     const Vec<2>& at = points[static_cast<std::size_t>(i)];
     double s = 0.0;

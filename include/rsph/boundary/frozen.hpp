@@ -2,6 +2,7 @@
 // Frozen particles: flagged in ParticleSet::frozen, they take part in every sum but are not
 // integrated; their x and v follow a prescribed motion (the Keplerian boundary zones of §5).
 #include "rsph/core/dimension.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/physics/concept.hpp"
 
@@ -34,7 +35,7 @@ void prescribe_frozen(const std::tuple<Terms...>& terms, ParticleSet<D, E>& p, d
         if (p.frozen[a]) t.prescribe(a, p.x[a], p.v[a], time);
     if constexpr (BoundaryZone<T, D>) {
       const std::size_t n = p.n_real;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
       for (std::size_t a = 0; a < n; ++a)
         if (p.frozen[a] && t.contains(p.x[a])) t.advance(p.x[a], p.v[a], dt);
     }

@@ -1,5 +1,7 @@
 #pragma once
 // Matrix-free preconditioned conjugate gradients for symmetric positive (semi-)definite systems A x = b.
+#include "rsph/core/parallel.hpp"
+
 #include <cmath>
 #include <cstddef>
 #include <vector>
@@ -22,7 +24,7 @@ CgResult conjugate_gradient(Apply&& apply, const std::vector<double>& diagonal, 
   x.resize(n, 0.0);
   auto dot = [n](const std::vector<double>& u, const std::vector<double>& v) {
     double s = 0.0;
-#pragma omp parallel for reduction(+ : s) schedule(static)
+#pragma omp parallel for reduction(+ : s) schedule(static) if (n >= kParallelMin)
     for (std::size_t i = 0; i < n; ++i) s += u[i] * v[i];
     return s;
   };

@@ -11,6 +11,15 @@
 
 namespace rsph {
 
+/// Rows a thread takes at a time in the passes whose rows are independent gathers (density, forces, stress, h):
+/// handed out as threads come free, so a thread whose core another process shares takes fewer, and the results
+/// stay the same bits, each row summed alone whichever thread sums it.
+inline constexpr std::size_t kRowChunk = 64;
+
+/// A pass over fewer items runs on one thread: waking a sleeping thread costs more than such a pass saves, and
+/// the programs' threads sleep when they wait (docs/performance.md, "Threads on a shared core").
+inline constexpr std::size_t kParallelMin = 4096;
+
 /// Number of threads a parallel pass uses (1 without OpenMP).
 inline int max_threads() {
 #ifdef _OPENMP
@@ -27,7 +36,7 @@ inline int max_threads() {
 template <class Body>
 void run_parallel(std::size_t n, Body&& body) {
   std::exception_ptr error;
-#pragma omp parallel num_threads(max_threads())
+#pragma omp parallel num_threads(n >= kParallelMin ? max_threads() : 1)
   {
     int t = 0, team = 1;
 #ifdef _OPENMP

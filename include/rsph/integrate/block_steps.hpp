@@ -5,6 +5,7 @@
 // equation from its last evaluation. This file plans a block and moves the particles; the caller evaluates
 // the rates of the particles whose step ends (active()) after each substep, and all of them at the last.
 #include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/integrate/leapfrog.hpp"
 #include "rsph/integrate/time_step.hpp"
 
@@ -32,7 +33,7 @@ class BlockSteps {
     const std::size_t n = p.n_real;
     double dt_lo = std::numeric_limits<double>::infinity(), dt_hi = 0.0;
     dt_own_.assign(n, std::numeric_limits<double>::infinity());
-#pragma omp parallel for schedule(static) reduction(min : dt_lo) reduction(max : dt_hi)
+#pragma omp parallel for schedule(static) reduction(min : dt_lo) reduction(max : dt_hi) if (n >= kParallelMin)
     for (std::size_t a = 0; a < n; ++a) {
       if (p.frozen[a]) continue;
       dt_own_[a] = particle_time_step(p, v_sig, params, a);
@@ -65,7 +66,7 @@ class BlockSteps {
   void drift(ParticleSet<D, E>& p, const Box<D>& box, std::uint64_t sub, double delta) {
     const std::size_t n = p.n_real;
     ends_now_.assign(n, 0);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
     for (std::size_t a = 0; a < n; ++a) {
       if (p.frozen[a]) continue;
       const double dt_a = delta * double(stride_[a]);
@@ -115,7 +116,7 @@ class BlockSteps {
   void predict_density(ParticleSet<D, E>& p, const std::vector<std::int32_t>& row, double time,
                        const std::vector<double>& drho_dt) const {
     const std::size_t n = p.n_real;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
     for (std::size_t a = 0; a < n; ++a)
       if (row[a] < 0) p.rho[a] = std::max(rho_eval_[a] + (time - t_eval_[a]) * drho_dt[a], 0.01 * rho_eval_[a]);
   }
@@ -126,7 +127,7 @@ class BlockSteps {
   /// Each particle's bin: the longest step 2^-k of the block within its own limit.
   void assign_bins(std::size_t n, const Plan& plan) {
     stride_.resize(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
     for (std::size_t a = 0; a < n; ++a) {
       stride_[a] = plan.n_sub;
       while (stride_[a] > 1 && plan.delta * double(stride_[a]) > dt_own_[a]) stride_[a] >>= 1;

@@ -2,6 +2,7 @@
 // Uniform cell list over the bounding box of a point set: O(N) build, O(1) candidates per point.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
 
 #include <algorithm>
 #include <array>
@@ -22,7 +23,7 @@ class CellList {
     const std::size_t n = x.size();
     lo_ = Vec<D>::Constant(std::numeric_limits<double>::max());
     Vec<D> hi = Vec<D>::Constant(std::numeric_limits<double>::lowest());
-#pragma omp parallel
+#pragma omp parallel if (n >= kParallelMin)
     {
       Vec<D> lo_t = lo_, hi_t = hi;
 #pragma omp for schedule(static) nowait
@@ -58,7 +59,7 @@ class CellList {
     for (int k = 0; k < D; ++k) n_cells *= static_cast<std::size_t>(dims_[k]);
     cell_start_.assign(n_cells + 1, 0);
     cell_of_.resize(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
     for (std::size_t i = 0; i < n; ++i) cell_of_[i] = static_cast<std::uint32_t>(cell_index(coords(x[i])));
     for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell_of_[i] + 1];
     for (std::size_t c = 0; c < n_cells; ++c) cell_start_[c + 1] += cell_start_[c];
@@ -66,7 +67,7 @@ class CellList {
     fill_.assign(cell_start_.begin(), cell_start_.end() - 1);
     for (std::size_t i = 0; i < n; ++i) sorted_[fill_[cell_of_[i]]++] = static_cast<std::uint32_t>(i);
     sorted_x_.resize(n);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
     for (std::size_t k = 0; k < n; ++k) sorted_x_[k] = x[sorted_[k]];
   }
 

@@ -2,6 +2,7 @@
 // Full neighbour lists (both directions) in CSR form, so per-particle loops run in parallel without
 // write conflicts. A pair (a, b) is a neighbour pair when |x_a - x_b| < support * h_ab, h_ab = (h_a + h_b)/2.
 #include "rsph/core/dimension.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/neighbors/cell_list.hpp"
 
 #include <algorithm>
@@ -165,7 +166,7 @@ void build_neighbor_list(const std::vector<Vec<D>>& x, const std::vector<double>
   out.offset.assign(n_rows + 1, 0);
   int n_threads = 1;
 #ifdef _OPENMP
-  n_threads = omp_get_max_threads();
+  if (n_rows >= kParallelMin) n_threads = omp_get_max_threads();
 #endif
   const std::size_t T = static_cast<std::size_t>(n_threads);
   out.buffers.resize(T);

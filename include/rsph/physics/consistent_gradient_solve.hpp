@@ -8,6 +8,7 @@
 // uniform state is exact. Warm-started from the last psi. Ghosts take their source's psi and membership.
 #include "rsph/boundary/ghosts.hpp"
 #include "rsph/core/conjugate_gradient.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/kernel/kernel.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
 #include "rsph/physics/consistent_gradient.hpp"
@@ -122,7 +123,7 @@ class ConsistentGradientWorkspace {
     for (std::size_t g = n; g < n_all; ++g) ghost_flips_[g - n] = boundary::mirror_flips(p, box, g);
     pair_w_.resize(nl.index.size());
     for (auto& r : rhs_) r.resize(m);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (m >= kParallelMin)
     for (std::size_t i = 0; i < m; ++i) {
       const std::uint32_t a = members_[i];
       Vec<D> E = Vec<D>::Zero();
@@ -216,7 +217,7 @@ class ConsistentGradientWorkspace {
     const auto& coef = coef_[ax];
     auto apply = [&](const std::vector<double>& in, std::vector<double>& out) {
       out.resize(m);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (m >= kParallelMin)
       for (std::size_t i = 0; i < m; ++i) {
         double off = 0.0;
         for (std::size_t e = row_[i]; e < row_[i + 1]; ++e) off += coef[e] * in[col_[e]];

@@ -4,6 +4,7 @@
 // (Price & Monaghan 2007; Price 2012 eqs. 10-12, 30-35). Without this term h stays as set, which is
 // what an RSPH lattice does (eqs. 2-4 of the paper with h_ab = (h_a + h_b) / 2).
 #include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/kernel/kernel.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
 
@@ -68,10 +69,10 @@ bool solve_density_and_h(const Solver& solver, P& p, const neighbors::NeighborLi
   const std::size_t n = p.n_real;
   ws.Omega.assign(p.size_with_ghosts(), 1.0);
   bool fits = true;
-#pragma omp parallel reduction(&& : fits)
+#pragma omp parallel reduction(&& : fits) if (n >= kParallelMin)
   {
     std::vector<std::pair<double, double>> r_m;  // (r_ab, m_b) of the candidates, computed once per particle
-#pragma omp for schedule(static)
+#pragma omp for schedule(dynamic, kRowChunk)
     for (std::size_t a = 0; a < n; ++a) {
       const double m_a = p.m[a];
       const double h_search = p.h[a] * margin;

@@ -1,6 +1,7 @@
 #pragma once
 // When to regularize: every c_r steps, every T_reg of simulated time, or adaptively (Appendix A).
 #include "rsph/core/errors.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/kernel/kernel.hpp"
 #include "rsph/kernel/lattice_sum.hpp"
@@ -89,7 +90,7 @@ struct Adaptive {
   std::vector<double> neighbour_numbers(const ParticleSet<D, E>& p, const neighbors::NeighborList& nl) const {
     std::vector<double> N(p.n_real);
     const std::size_t n = p.n_real;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
     for (std::size_t a = 0; a < n; ++a) {
       double n_a = 0.0;  // eq. (A1): the particle itself left out
       const double h_a = p.h[a], inv_h_a = 1.0 / h_a;
@@ -112,7 +113,7 @@ struct Adaptive {
     if (!s.number_density.empty()) {  // eq. (A1) summed by the driver's density pass
       N.resize(p.n_real);
       const auto n_a = s.number_density;
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (p.n_real >= kParallelMin)
       for (std::size_t a = 0; a < p.n_real; ++a) N[a] = interaction_volume(p.h[a]) * n_a[a];
     } else {
       N = neighbour_numbers(p, nl);
@@ -124,7 +125,7 @@ struct Adaptive {
     // m_b / rho_b N_b of every point, ghosts taking their source's N
     auto& volume_N = volume_N_;
     volume_N.resize(p.size_with_ghosts());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) if (p.size_with_ghosts() >= kParallelMin)
     for (std::size_t b = 0; b < p.size_with_ghosts(); ++b)
       volume_N[b] = p.m[b] / p.rho[b] * N[b < p.n_real ? b : p.ghost_source[b - p.n_real]];
     // Which condition particle a violates (0: none).
@@ -150,7 +151,7 @@ struct Adaptive {
     // The first particle in index order that fires, whatever the thread count.
     const std::size_t n = p.n_real;
     std::size_t first = n;
-#pragma omp parallel for schedule(static) reduction(min : first)
+#pragma omp parallel for schedule(static) reduction(min : first) if (n >= kParallelMin)
     for (std::size_t a = 0; a < n; ++a)
       if (a < first && reason(a) != 0) first = a;
     if (first == n) return false;

@@ -1,6 +1,7 @@
 #pragma once
 // The density pass: eq. (2) summed over neighbour lists, and n_a of eq. (A1) for a schedule that asks.
 // The pair physics it sums is physics::density_term (hydro.hpp); this is only the loop.
+#include "rsph/core/parallel.hpp"
 #include "rsph/kernel/kernel.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
 #include "rsph/physics/hydro.hpp"
@@ -32,7 +33,7 @@ void density_rows(P& p, const neighbors::NeighborList& nl, const Rows& rows, Num
   if constexpr (with_number_density) nd.n.resize(p.n_real);
   if constexpr (keep_pair_kernel) nd.pair_kernel.resize(nl.pairs());
   nd.pair_kernel_full = keep_pair_kernel;  // a subset pass leaves the kept values stale
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, kRowChunk) if (n_rows >= kParallelMin)
   for (std::size_t i = 0; i < n_rows; ++i) {
     const std::uint32_t a = rows[i];
     const double h_a = h[a], inv_h_a = 1.0 / h_a;

@@ -3,6 +3,7 @@
 // summed over neighbour lists, with every pair term, stress and body force a scene names inlined. The
 // pair physics are the small functions of hydro.hpp, shear_viscosity.hpp and each term's pair(); this
 // file is only the loop that gathers a pair and adds them up.
+#include "rsph/core/parallel.hpp"
 #include "rsph/kernel/kernel.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
 #include "rsph/physics/concept.hpp"
@@ -115,7 +116,7 @@ void force_rows(P& p, const neighbors::NeighborList& nl, const Rows& rows, const
   if constexpr (with_drho) out.drho_dt.resize(n);
   const std::size_t n_rows = rows.size();
   const auto forces_now = body_forces_at<D>(terms, time);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, kRowChunk) if (n_rows >= kParallelMin)
   for (std::size_t i = 0; i < n_rows; ++i) {
     const std::uint32_t a = rows[i];
     Vec<D> dv = Vec<D>::Zero();

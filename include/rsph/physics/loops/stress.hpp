@@ -2,6 +2,7 @@
 // The velocity-gradient pass of a viscous stress term: each particle's S / rho^2 from its velocity
 // gradient (physics/shear_viscosity.hpp), ghosts mirrored; the force pass then sums eq. (3)'s stress part.
 #include "rsph/boundary/ghosts.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/kernel/kernel.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
 #include "rsph/physics/shear_viscosity.hpp"
@@ -32,7 +33,7 @@ void stress_over_rho2(const P& p, const Box<S::dim>& box, const neighbors::Neigh
   constexpr int D = S::dim;
   const std::size_t n = p.n_real;
   S_over_rho2.resize(p.size_with_ghosts());
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(dynamic, kRowChunk) if (n >= kParallelMin)
   for (std::size_t a = 0; a < n; ++a) {
     Mat<D> G = Mat<D>::Zero();
     const double h_a = p.h[a], inv_h_a = 1.0 / h_a;
