@@ -152,14 +152,16 @@ inline void write_run_record(io::Json& summary, const CommonOptions& common) {
   summary.set("parameters", parameters).set("command_line", common.command_line).set("version", RSPH_VERSION);
 }
 
-/// How a decomposed run shared its work: ranks, the halo's size against the particles', the bytes the ranks sent
-/// each other per step, and the most wall seconds a rank spent communicating (or waiting for the others).
+/// How a decomposed run shared its work (on more than one rank): ranks, the halo's size against the particles', the
+/// bytes the ranks sent each other per step, and the most wall seconds a rank spent communicating (or waiting for the
+/// others).
 template <class Sim>
 void write_ranks(io::Json& summary, const Sim& sim) {
   const auto& d = sim.domain();
   const auto& c = d.counts();
   const double particles = static_cast<double>(d.sum(sim.particles().n_real));
   summary.set("ranks", static_cast<std::uint64_t>(d.ranks()));
+  if (d.ranks() == 1) return;  // one rank sends nothing
   summary.set("halo_fraction", static_cast<double>(d.sum(c.halo_points)) / particles);
   summary.set("remap_halo_fraction", static_cast<double>(d.sum(c.remap_halo_points)) / particles);
   summary.set("bytes_sent_per_step", static_cast<double>(d.sum(c.bytes_sent)) / std::max<double>(1, sim.steps()));

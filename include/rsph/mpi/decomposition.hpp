@@ -152,13 +152,14 @@ class Decomposition {
     p.next_id = comm_->all_reduce(p.next_id, MPI_MAX);
   }
 
-  /// The ghosts of every point this rank needs: the real particles of other ranks within `width` of its own
-  /// (across periodic faces too), appended first, then the periodic and mirror images of boundary::add_images
+  /// The ghosts of every point this rank needs: the real particles of other ranks within reach of its own, or
+  /// whose reach its own are in (reach: `width` for the largest h, in proportion for the others; across periodic
+  /// faces too), appended first, then the periodic and mirror images of boundary::add_images
   /// of real particles and halos. One rank: boundary::make_ghosts itself.
   template <bool E>
   void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
     p.clear_ghosts();
-    if (ranks() > 1) receive_halos(p, box, width);
+    if (ranks() > 1) receive_halos(p, box, width, true);
     counts_.halo_points = halo_count_;
     boundary::add_images(p, box, width);
   }
@@ -178,7 +179,7 @@ class Decomposition {
   std::size_t add_remap_halo(ParticleSet<D, E>& p, const Box<D>& box, double width) {
     const std::size_t n_own = p.n_real;
     if (ranks() == 1) return n_own;
-    receive_halos(p, box, width);  // as ghosts first, then made real
+    receive_halos(p, box, width, false);  // as ghosts first, then made real
     counts_.remap_halo_points = halo_count_;
     p.id.resize(n_own);
     p.id.insert(p.id.end(), halo_count_, 0);
@@ -218,6 +219,11 @@ class Decomposition {
   /// empty set on the others: for output, which rank 0 writes alone.
   template <bool E>
   ParticleSet<D, E> gather_on_root(const ParticleSet<D, E>& p) const {
+    if (ranks() == 1) {
+      auto all = p;
+      all.clear_ghosts();
+      return all;
+    }
     Lists to_root(static_cast<std::size_t>(ranks()));
     for (std::size_t a = 0; a < p.n_real; ++a) to_root[0].push_back(static_cast<std::uint32_t>(a));
     ParticleSet<D, E> all;
@@ -247,7 +253,7 @@ class Decomposition {
   using Lists = std::vector<std::vector<std::uint32_t>>;
 
   template <bool E>
-  void receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width);
+  void receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle);
 
   template <class T>
   static std::vector<T> gather(const std::vector<T>& f, const std::vector<std::uint32_t>& which) {
@@ -318,30 +324,37 @@ bool reaches(const Vec<D>& x, const Vec<D>& lo, const Vec<D>& hi, const Box<D>& 
 
 template <int D>
 template <bool E>
-void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width) {
-  // each rank's reach: the bounds of its real particles, widened by `width` (empty for a rank without any)
-  std::vector<double> mine(2 * D);
-  for (int k = 0; k < D; ++k) {
-    mine[k] = std::numeric_limits<double>::infinity();
-    mine[D + k] = -std::numeric_limits<double>::infinity();
-  }
+void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle) {
+  // A pair interacts within support max(h_a, h_b) (times the search margin), so particle a reaches
+  // R_a = width h_a / h_max: each rank's bounds, of its particles and of their reaches, go to every rank; a
+  // particle goes to a rank whose reach holds it or whose particles it reaches. Without per_particle, R = width.
+  double h_max = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) h_max = std::max(h_max, p.h[a]);
+  h_max = max(h_max);
+  const auto reach = [&](std::size_t a) { return per_particle && h_max > 0.0 ? width * p.h[a] / h_max : width; };
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> mine(4 * D);  // lo, hi of the particles; lo, hi of their reaches (empty for none)
+  for (int k = 0; k < D; ++k) mine[k] = mine[2 * D + k] = inf, mine[D + k] = mine[3 * D + k] = -inf;
   for (std::size_t a = 0; a < p.n_real; ++a)
     for (int k = 0; k < D; ++k) {
-      mine[k] = std::min(mine[k], p.x[a][k] - width);
-      mine[D + k] = std::max(mine[D + k], p.x[a][k] + width);
+      const double x = p.x[a][k], r = reach(a);
+      mine[k] = std::min(mine[k], x), mine[D + k] = std::max(mine[D + k], x);
+      mine[2 * D + k] = std::min(mine[2 * D + k], x - r), mine[3 * D + k] = std::max(mine[3 * D + k], x + r);
     }
   const auto all = comm_->all_gather(std::span<const double>(mine));
   const int me = comm_->rank();
   halo_send_.assign(static_cast<std::size_t>(ranks()), {});
   for (int q = 0; q < ranks(); ++q) {
     if (q == me) continue;
-    Vec<D> lo, hi;
-    for (int k = 0; k < D; ++k) {
-      lo[k] = all[2 * D * q + k];
-      hi[k] = all[2 * D * q + D + k];
+    const double* b = &all[4 * D * static_cast<std::size_t>(q)];
+    const Vec<D> lo = Eigen::Map<const Vec<D>>(b), hi = Eigen::Map<const Vec<D>>(b + D);
+    const Vec<D> reach_lo = Eigen::Map<const Vec<D>>(b + 2 * D), reach_hi = Eigen::Map<const Vec<D>>(b + 3 * D);
+    for (std::size_t a = 0; a < p.n_real; ++a) {
+      const double r = reach(a);
+      if (reaches<D>(p.x[a], reach_lo, reach_hi, box, width) ||
+          reaches<D>(p.x[a], lo - Vec<D>::Constant(r), hi + Vec<D>::Constant(r), box, width))
+        halo_send_[static_cast<std::size_t>(q)].push_back(std::uint32_t(a));
     }
-    for (std::size_t a = 0; a < p.n_real; ++a)
-      if (reaches<D>(p.x[a], lo, hi, box, width)) halo_send_[static_cast<std::size_t>(q)].push_back(std::uint32_t(a));
   }
   const auto x = send(p.x, halo_send_);
   halo_first_ = p.n_real;

@@ -1,0 +1,84 @@
+#!/usr/bin/python3
+"""A model of rsph's parallel efficiency on P ranks, from figures measured on the 2-core development machine
+(docs/performance.md, "Many ranks") and stated assumptions about a cluster's network, projected to 64, 512
+and 4096 ranks for a 3D disk of 1e7 and 1e8 particles. It prints a Markdown table and, with --check, the
+model's halo fractions beside the ones measured at 2 and 4 ranks.
+
+Per step and rank, with n = N / P particles:
+  compute   t_c = n c                          c: measured seconds per particle-step (one thread)
+  halo      H = k_h n^(2/3)                    particles; k_h fitted to the measured halo fractions
+  remap     t_r = (f_r c_r n)(1 + R / L)^3     every T steps, a rank remaps its part widened by the remap's
+                                               reach R = 12 h (h = 1.2 spacings), L = n^(1/3) spacings
+  messages  t_m = m_a alpha P + m_r alpha log2 P + b H / beta
+            m_a all-to-alls (dense counts: alpha P each), m_r reductions (alpha log2 P each),
+            b bytes per halo particle per step
+  imbalance a fixed 5 % (Zoltan's tolerance)
+  efficiency = t_c' / (t_c' + t_r' + t_m + imbalance), primes: what one rank of the serial run would do.
+"""
+import argparse
+import math
+
+# measured (docs/performance.md): rsph-sedov 3D, one thread
+C_SPH = 11.39 / (92 * 32768)     # seconds per particle-step, grad-h SPH
+C_RSPH = (6.53 - 0.646) / (119 * 32768)  # RSPH's SPH step
+REMAP = 0.646 / 4 / 32768        # seconds per particle per remap (first order, cubic lattice)
+STEPS_PER_REMAP = 119 / 4
+BYTES_PER_HALO = 155.0           # measured: 2.97e6 bytes per step for 19 200 halo particles (n = 40, P = 2)
+ALLTOALLS = 30                   # per step: 15 field exchanges (9 for the halos, 6 refreshed), each an MPI_Alltoall
+                                 # of counts and an Alltoallv, dense in P
+REDUCTIONS = 23                  # per step: balance (2), time step, h_max (2), fits, due, check, totals (14)
+# measured halo fractions of rsph-sedov --method sph --r-end 0.12, 3D, at P = 2 and 4 (n = N / P)
+MEASURED = [(16, 2, 0.625), (24, 2, 0.417), (32, 2, 0.375), (40, 2, 0.30),
+            (16, 4, 1.64), (24, 4, 1.01), (32, 4, 0.89), (40, 4, 0.69)]
+# assumed network of a cluster (not measured here)
+ALPHA = 2e-6    # seconds per message
+BETA = 10e9     # bytes per second per rank
+
+
+def fit_halo():
+    """k_h of H / n = k_h n^(-1/3), least squares over the 4-rank runs, whose parts have neighbours on more sides,
+    as in a large run (2-rank slabs touch one neighbour, through two faces)."""
+    pts = [(n ** 3 / P, f) for n, P, f in MEASURED if P == 4]
+    return sum(f * m ** (-1 / 3) for m, f in pts) / sum(m ** (-2 / 3) for m, f in pts)
+
+
+def efficiency(N, P, k_h, rsph=True):
+    n = N / P
+    c = C_RSPH if rsph else C_SPH
+    t_c = n * c
+    H = min(k_h * n ** (2 / 3), N - n)
+    t_m = ALLTOALLS * ALPHA * P + REDUCTIONS * ALPHA * math.log2(max(P, 2)) + BYTES_PER_HALO * H / BETA
+    t_r, t_r_serial = 0.0, 0.0
+    if rsph:
+        L = n ** (1 / 3)
+        widen = min((1 + 2 * 12 * 1.2 / L) ** 3, P)
+        t_r_serial = REMAP * n / STEPS_PER_REMAP
+        t_r = t_r_serial * widen
+    useful = t_c + t_r_serial
+    total = 1.05 * (t_c + t_r) + t_m
+    return useful / total, t_c, t_r, t_m, H / n
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--check", action="store_true", help="the model's halo fractions beside the measured ones")
+    a = ap.parse_args()
+    k_h = fit_halo()
+    if a.check:
+        print(f"k_h = {k_h:.2f}")
+        for n, P, f in MEASURED:
+            m = n ** 3 / P
+            print(f"n = {n}^3, P = {P}: measured {f:.3f}, model {min(k_h * m ** (-1 / 3), P - 1):.3f}")
+    print("| particles | ranks | particles per rank | halo / own | step: compute, remap, messages (ms) | "
+          "efficiency RSPH | efficiency SPH |")
+    print("|---|---|---|---|---|---|---|")
+    for N in (1e7, 1e8):
+        for P in (64, 512, 4096):
+            e, t_c, t_r, t_m, frac = efficiency(N, P, k_h, True)
+            e_sph = efficiency(N, P, k_h, False)[0]
+            print(f"| {N:.0e} | {P} | {N / P:.0f} | {frac:.2f} | {1e3 * t_c:.1f}, {1e3 * t_r:.1f}, {1e3 * t_m:.1f} | "
+                  f"{e:.2f} | {e_sph:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
