@@ -142,11 +142,15 @@ TEST_CASE(
   const double width = 0.06;
   auto serial = all;
   boundary::make_ghosts(serial, box, width);
-  mpi::Decomposition<2> d;
+  const auto method = GENERATE(as<std::string>{}, "RCB", "HSFC");
+  mpi::DecompositionParams params;
+  params.partition.method = method;
+  mpi::Decomposition<2> d(MPI_COMM_WORLD, params);
   auto p = all;
   d.distribute(p);
   d.balance(p, {});
   d.make_ghosts(p, box, width);
+  INFO("partition " << method);
   // for each real particle: how many points (real or ghost) lie within width, and their summed offsets
   const auto near = [&](const ParticleSet<2, false>& q, const Vec<2>& x) {
     int n = 0;
