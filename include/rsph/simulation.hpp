@@ -181,11 +181,17 @@ class Simulation {
     // members of zones that keep them sit the remap out, identities and all
     const bool keep = boundary::any_zone_keeps_members(terms_);
     auto kept = keep ? p_.take_if([&](std::size_t a) { return p_.frozen[a] != 0; }) : Particles{};
-    if constexpr (distributed)
-      remap_on_ranks();
-    else {
+    const auto remap_here = [&] {
       kinetic_removed_ += reg_.remap(p_, box_, step_info());
       p_.renumber();  // every particle is new
+    };
+    if constexpr (distributed) {
+      if (on_many_ranks())
+        remap_on_ranks();
+      else
+        remap_here();
+    } else {
+      remap_here();
     }
     if (keep) p_.append(kept);
     if constexpr (corrected) cg_.reset();  // new particles: solve afresh
@@ -275,8 +281,8 @@ class Simulation {
   /// Moves particles between ranks when the decomposition says so, weighted by their neighbour counts, with
   /// the per-particle state a step reads before its rates are evaluated again (signal speeds, d rho/dt).
   void rebalance() requires distributed {
+    if (!on_many_ranks()) return;
     auto& d = domain();
-    if (d.ranks() == 1) return;
     const std::size_t n = p_.n_real;
     work_.assign(n, 1.0);
     if (nl_.offset.size() == n + 1)
@@ -286,16 +292,19 @@ class Simulation {
     d.balance(p_, std::span<const double>(work_), v_sig_, drho_dt_);
   }
 
+  /// Whether a decomposition spreads the run over more than one rank (one rank runs the serial code).
+  bool on_many_ranks() const {
+    if constexpr (distributed)
+      return domain().ranks() > 1;
+    else
+      return false;
+  }
+
   /// The remap on many ranks: each rank remaps its own particles with those of other ranks out to the remap's
   /// reach, keeps the new particles whose site its own gas held, and checks that the mass over all ranks is
-  /// what it was (a reach too short would lose or double some). One rank: the serial remap itself.
+  /// what it was (a reach too short would lose or double some).
   void remap_on_ranks() requires distributed {
     auto& d = domain();
-    if (d.ranks() == 1) {
-      kinetic_removed_ += reg_.remap(p_, box_, step_info());
-      p_.renumber();
-      return;
-    }
     const auto before = totals();
     double h_max = 0.0;
     for (std::size_t a = 0; a < p_.n_real; ++a) h_max = std::max(h_max, p_.h[a]);
@@ -315,8 +324,8 @@ class Simulation {
   /// After the pressure pass: the fields a later pass reads, on the halos of other ranks' particles, then on
   /// the images made of them.
   void refresh_halos() requires distributed {
+    if (!on_many_ranks()) return;
     auto& d = domain();
-    if (d.ranks() == 1) return;
     d.refresh_halos(p_.rho);
     d.refresh_halos(p_.P);
     d.refresh_halos(p_.cs);
@@ -347,7 +356,7 @@ class Simulation {
     s.time_since_last = since_.time;
     s.neighbors = &nl_;
     if constexpr (distributed)
-      if (domain().ranks() > 1) s.refresh_halos = [&d = domain()](std::vector<double>& f) { d.refresh_halos(f); };
+      if (on_many_ranks()) s.refresh_halos = [&d = domain()](std::vector<double>& f) { d.refresh_halos(f); };
     if constexpr (wants_number_density) {
       s.number_density = nd_.n;
       if (nd_.pair_kernel_full) s.pair_kernel = nd_.pair_kernel;

@@ -102,7 +102,6 @@ class Decomposition {
     if (P == 1) return;
     const std::size_t n = p.n_real, begin = n * r / P, end = n * (r + 1) / P;
     p.erase_if([&](std::size_t a) { return a < begin || a >= end; });
-    due_ = true;
   }
 
   /// Recomputes the partition when it is due and moves the particles (their fields and the per-particle
@@ -114,7 +113,7 @@ class Decomposition {
     if (!due_ && steps_ < params_.repartition_every) {
       double mine = 0.0;
       for (double w : work) mine += w;
-      const double most = comm_->max(mine), mean = static_cast<double>(comm_->all_reduce(mine, MPI_SUM)) / ranks();
+      const double most = comm_->max(mine), mean = comm_->all_reduce(mine, MPI_SUM) / ranks();
       if (!(most > params_.rebalance_above * mean)) return;
     }
     p.clear_ghosts();
@@ -298,7 +297,7 @@ class Decomposition {
   std::shared_ptr<Comm> comm_;  // shared: a Simulation copies its terms
   DecompositionParams params_;
   std::shared_ptr<Partitioner<D>> partitioner_;
-  bool due_ = true;
+  bool due_ = true;  ///< the first balance partitions
   int steps_ = 0;
   Lists halo_send_;  ///< per rank: the real particles whose halos it holds, in the order it holds them
   std::size_t halo_first_ = 0, halo_count_ = 0;
