@@ -93,8 +93,7 @@ class Simulation {
   static_assert((int(DomainDecomposition<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one decomposition");
   static_assert(!distributed || regularize::remaps_on_ranks<Reg>(),
                 "this regularizer does not run on many ranks: its lattice depends on the whole gas (rings, levels)");
-  static_assert(!distributed || (!corrected && !has_stress),
-                "consistent gradients and viscous stress terms do not run on many ranks yet");
+  static_assert(!distributed || !corrected, "consistent gradients do not run on many ranks yet");
 
   Simulation(Particles particles, Box<D> box, EOS eos, Reg reg, TimeStepParams params, Terms... terms)
       : p_(std::move(particles)),
@@ -251,7 +250,7 @@ class Simulation {
       density_pass();
     auto t0 = clock::now();
     if constexpr (corrected) cg_.template update<Kernel>(correction(), p_, box_, nl_);
-    if constexpr (has_stress) physics::loops::stress_over_rho2<LoopScheme>(p_, box_, nl_, stress_term(), S_over_rho2_);
+    if constexpr (has_stress) stress_pass();
     if (params_.max_bin > 0 || corrected)
       force_pass<true>(neighbors::FirstN{p_.n_real});
     else
@@ -312,13 +311,26 @@ class Simulation {
     const std::size_t n_own = d.add_remap_halo(p_, box_, d.remap_reach_in_h() * h_max);
     const auto old_x = p_.x;
     const auto old_id = p_.id;
-    reg_.remap(p_, box_, step_info());
+    const auto cells = d.remap_cells(p_, box_, n_own, 0.5 * d.remap_reach_in_h() * h_max);
+    auto info = step_info();
+    info.part = {cells, [&d](double v) { return d.max(v); }};
+    reg_.remap(p_, box_, info);
     d.keep_owned_sites(p_, box_, old_x, old_id, n_own, Kernel::support * h_max);
     const auto after = totals();
     if (!(std::abs(after.mass - before.mass) <= 1e-12 * before.mass))
       throw NumericalError("the remap on " + std::to_string(d.ranks()) + " ranks changed the mass by " +
                            std::to_string(after.mass / before.mass - 1.0) + ": its reach is too short");
     kinetic_removed_ += before.kinetic - after.kinetic;
+  }
+
+  /// The viscous stress of every point; on many ranks the halos' from their owners, then their images'.
+  void stress_pass() {
+    physics::loops::stress_over_rho2<LoopScheme>(p_, box_, nl_, stress_term(), S_over_rho2_);
+    if constexpr (distributed)
+      if (on_many_ranks()) {
+        domain().refresh_halos(S_over_rho2_);
+        physics::loops::stress_images(p_, box_, S_over_rho2_);
+      }
   }
 
   /// After the pressure pass: the fields a later pass reads, on the halos of other ranks' particles, then on
@@ -523,7 +535,9 @@ class Simulation {
     require(params_.max_bin == 0 || (!grad_h && !has_stress),
             "individual time steps (max_bin > 0) need fixed smoothing lengths and no viscous stress term");
     require(params_.max_bin == 0 || !corrected, "consistent gradients need one global time step (max_bin = 0)");
-    require(params_.max_bin == 0 || !distributed, "individual time steps do not run on many ranks yet (max_bin = 0)");
+    if constexpr (distributed)
+      require(params_.max_bin == 0 || domain().ranks() == 1,
+              "individual time steps do not run on many ranks yet (take --max-bin 0 there)");
     validate_policy(eos_);
     validate_policy(reg_);
     std::apply([&](const auto&... term) { (validate_policy(term), ...); }, terms_);

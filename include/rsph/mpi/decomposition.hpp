@@ -22,6 +22,7 @@
 #include <limits>
 #include <memory>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 namespace rsph::mpi {
@@ -60,12 +61,29 @@ struct Parts {
   using Scalar = T;
   static constexpr int n = 1;
 };
-template <int D>
-struct Parts<Vec<D>> {
+template <int R, int C, int O, int MR, int MC>
+struct Parts<Eigen::Matrix<double, R, C, O, MR, MC>> {  // vectors and matrices, by their coefficients
   using Scalar = double;
-  static constexpr int n = D;
+  static constexpr int n = R * C;
 };
 }  // namespace detail
+
+/// Does a point at x, or one of its periodic images, lie within the box [lo, hi]?
+template <int D>
+bool reaches(const Vec<D>& x, const Vec<D>& lo, const Vec<D>& hi, const Box<D>& box, double width) {
+  for (int k = 0; k < D; ++k) {
+    if (!box.periodic(k)) {
+      if (x[k] < lo[k] || x[k] > hi[k]) return false;
+      continue;
+    }
+    const double L = box.hi[k] - box.lo[k];
+    const int reach = static_cast<int>(std::ceil(width / L)) + 1;
+    bool any = false;
+    for (int s = -reach; s <= reach && !any; ++s) any = x[k] + s * L >= lo[k] && x[k] + s * L <= hi[k];
+    if (!any) return false;
+  }
+  return true;
+}
 
 /// The decomposition as a term of a Simulation (core/domain.hpp): a scene that names it runs on the ranks of
 /// its communicator; one that does not is unchanged.
@@ -189,6 +207,24 @@ class Decomposition {
     return n_own;
   }
 
+  /// After add_remap_halo: the particles whose cells the remap builds (ascending), this rank's own n_own and
+  /// the others within `width` of their bounds (across periodic faces too). Cells farther out feed only sites
+  /// another rank keeps, and where the halo ends they are open.
+  template <bool E>
+  std::vector<std::uint32_t> remap_cells(const ParticleSet<D, E>& p, const Box<D>& box, std::size_t n_own,
+                                         double width) const {
+    std::vector<std::uint32_t> only(n_own);
+    for (std::size_t a = 0; a < n_own; ++a) only[a] = static_cast<std::uint32_t>(a);
+    if (ranks() == 1 || n_own == 0) return ranks() == 1 ? std::vector<std::uint32_t>{} : only;
+    Vec<D> lo = p.x[0], hi = p.x[0];
+    for (std::size_t a = 1; a < n_own; ++a) lo = lo.cwiseMin(p.x[a]), hi = hi.cwiseMax(p.x[a]);
+    lo.array() -= width;
+    hi.array() += width;
+    for (std::size_t a = n_own; a < p.n_real; ++a)
+      if (reaches<D>(p.x[a], lo, hi, box, width)) only.push_back(static_cast<std::uint32_t>(a));
+    return only;
+  }
+
   /// After the remap of the local set: keeps the new particles whose site's nearest old particle (old_x, old_id,
   /// this rank's own the first n_own; ties to the lower identity) was this rank's, so that every site is kept by
   /// exactly one rank, the one that held the gas there. They are numbered after all ranks' particles so far, rank
@@ -218,29 +254,14 @@ class Decomposition {
   /// empty set on the others: for output, which rank 0 writes alone.
   template <bool E>
   ParticleSet<D, E> gather_on_root(const ParticleSet<D, E>& p) const {
-    if (ranks() == 1) {
-      auto all = p;
-      all.clear_ghosts();
-      return all;
-    }
-    Lists to_root(static_cast<std::size_t>(ranks()));
-    for (std::size_t a = 0; a < p.n_real; ++a) to_root[0].push_back(static_cast<std::uint32_t>(a));
-    ParticleSet<D, E> all;
-    all.m = send(p.m, to_root);
-    all.x = send(p.x, to_root);
-    all.v = send(p.v, to_root);
-    all.h = send(p.h, to_root);
-    all.rho = send(p.rho, to_root);
-    all.P = send(p.P, to_root);
-    all.cs = send(p.cs, to_root);
-    if constexpr (E) all.u = send(p.u, to_root);
-    all.frozen = send(p.frozen, to_root);
-    all.id = send(p.id, to_root);
-    all.n_real = all.x.size();
-    all.dv_dt.assign(all.n_real, Vec<D>::Zero());
-    if constexpr (E) all.du_dt.assign(all.n_real, 0.0);
-    all.next_id = p.next_id;
-    return all;
+    return collect(p, false);
+  }
+
+  /// Every rank's real particles on every rank, in rank order: for a measure that needs the whole set at once
+  /// (an interface traced through the field), made once at the end of a run.
+  template <bool E>
+  ParticleSet<D, E> gather_everywhere(const ParticleSet<D, E>& p) const {
+    return collect(p, true);
   }
 
   /// Mass, momentum, angular momentum and energies over every rank's real particles, the same bits at any
@@ -250,6 +271,35 @@ class Decomposition {
 
  private:
   using Lists = std::vector<std::vector<std::uint32_t>>;
+
+  template <bool E>
+  ParticleSet<D, E> collect(const ParticleSet<D, E>& p, bool everywhere) const {
+    if (ranks() == 1) {
+      auto all = p;
+      all.clear_ghosts();
+      return all;
+    }
+    Lists to(static_cast<std::size_t>(ranks()));
+    for (int q = 0; q < (everywhere ? ranks() : 1); ++q)
+      for (std::size_t a = 0; a < p.n_real; ++a)
+        to[static_cast<std::size_t>(q)].push_back(static_cast<std::uint32_t>(a));
+    ParticleSet<D, E> all;
+    all.m = send(p.m, to);
+    all.x = send(p.x, to);
+    all.v = send(p.v, to);
+    all.h = send(p.h, to);
+    all.rho = send(p.rho, to);
+    all.P = send(p.P, to);
+    all.cs = send(p.cs, to);
+    if constexpr (E) all.u = send(p.u, to);
+    all.frozen = send(p.frozen, to);
+    all.id = send(p.id, to);
+    all.n_real = all.x.size();
+    all.dv_dt.assign(all.n_real, Vec<D>::Zero());
+    if constexpr (E) all.du_dt.assign(all.n_real, 0.0);
+    all.next_id = p.next_id;
+    return all;
+  }
 
   template <bool E>
   void receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle);
@@ -276,20 +326,20 @@ class Decomposition {
     for (std::size_t q = 0; q < lists.size(); ++q) {
       out[q].reserve(lists[q].size() * k);
       for (auto a : lists[q]) {
-        if constexpr (k == 1)
+        if constexpr (std::is_same_v<T, S>)
           out[q].push_back(f[a]);
         else
-          for (int j = 0; j < k; ++j) out[q].push_back(f[a][j]);
+          for (int j = 0; j < k; ++j) out[q].push_back(f[a].data()[j]);
       }
       counts_.bytes_sent += out[q].size() * sizeof(S);
     }
     const auto in = comm_->exchange(out);
     std::vector<T> r(in.size() / k);
     for (std::size_t i = 0; i < r.size(); ++i) {
-      if constexpr (k == 1)
+      if constexpr (std::is_same_v<T, S>)
         r[i] = in[i];
       else
-        for (int j = 0; j < k; ++j) r[i][j] = in[k * i + static_cast<std::size_t>(j)];
+        for (int j = 0; j < k; ++j) r[i].data()[j] = in[k * i + static_cast<std::size_t>(j)];
     }
     return r;
   }
@@ -303,23 +353,6 @@ class Decomposition {
   std::size_t halo_first_ = 0, halo_count_ = 0;
   mutable ExchangeCounts counts_;
 };
-
-/// Does a point at x, or one of its periodic images, lie within the box [lo, hi]?
-template <int D>
-bool reaches(const Vec<D>& x, const Vec<D>& lo, const Vec<D>& hi, const Box<D>& box, double width) {
-  for (int k = 0; k < D; ++k) {
-    if (!box.periodic(k)) {
-      if (x[k] < lo[k] || x[k] > hi[k]) return false;
-      continue;
-    }
-    const double L = box.hi[k] - box.lo[k];
-    const int reach = static_cast<int>(std::ceil(width / L)) + 1;
-    bool any = false;
-    for (int s = -reach; s <= reach && !any; ++s) any = x[k] + s * L >= lo[k] && x[k] + s * L <= hi[k];
-    if (!any) return false;
-  }
-  return true;
-}
 
 template <int D>
 template <bool E>

@@ -3,6 +3,7 @@
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/neighbors/neighbor_list.hpp"
+#include "rsph/regularize/remap_params.hpp"
 
 #include <concepts>
 #include <cstdint>
@@ -28,6 +29,10 @@ struct StepInfo {
   /// On many ranks (mpi/decomposition.hpp): fills a per-point field's halo entries from the ranks that own them,
   /// given the field on the real particles and sized for every point; empty in one process.
   std::function<void(std::vector<double>&)> refresh_halos;
+  /// On many ranks: the old particles (ascending) whose cells the remap builds, this rank's own and the other
+  /// ranks' near them (the cells farther out, open where the halo ends, would only feed sites another rank
+  /// keeps), and the reduction over ranks the hand-on of light cells needs. Empty in one process.
+  regularize::RankPart part;
 };
 
 /// A regularizer decides when (`due`) and remaps the particles onto a new set (`remap`) conserving

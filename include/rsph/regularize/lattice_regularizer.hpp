@@ -128,7 +128,7 @@ class LatticeRegularizer {
     Record r;
     r.step = s.step;
     r.time = s.time;
-    r.stats = order_.remap(p, box, lattice_, builder_, params_, region_, workspace_, order_workspace_);
+    r.stats = order_.remap(p, box, lattice_, builder_, params_, region_, workspace_, order_workspace_, s.part);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     log_.push_back(r);
     return r.stats.kinetic_converted;

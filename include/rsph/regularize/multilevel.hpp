@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <map>
 #include <numeric>
+#include <span>
 #include <string>
 #include <type_traits>
 #include <vector>
@@ -243,11 +244,13 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
 }  // namespace detail
 
 /// Remaps `p` onto a multi-level lattice (detail::remap_onto_levels), each old cell handing out its mean by
-/// eqs. (6)-(9). Mass, momentum and total energy are conserved exactly as on a uniform lattice.
+/// eqs. (6)-(9). Mass, momentum and total energy are conserved exactly as on a uniform lattice. Every old cell
+/// is built (`part` must be empty: multi-level lattices remap in one process).
 template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                               Builder& builder, const RemapParams& params, const Region& region = {},
-                              RemapWorkspace<D>* workspace = nullptr) {
+                              RemapWorkspace<D>* workspace = nullptr, const RankPart& part = {}) {
+  require(part.cells.empty() && !part.max_over_ranks, "a multi-level lattice remaps in one process");
   ml.validate();
   RemapWorkspace<D> local;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;

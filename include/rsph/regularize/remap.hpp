@@ -100,7 +100,8 @@ struct AddToSums {
 template <class Lattice, class Builder, int D, bool E, class Grid, class Region>
 Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
                              const RemapParams& params, const Grid& grid, const Region& region,
-                             RemapWorkspace<D>& workspace, bool record_reach = false, bool allow_sparse = true) {
+                             RemapWorkspace<D>& workspace, bool record_reach = false, bool allow_sparse = true,
+                             std::span<const std::uint32_t> only = {}) {
   static_assert(check_closing_region<Region, D>());
   static_assert(D > 1 || !Region::clips, "closing regions are for 2D and 3D cells");
   const std::size_t n_old = p.n_real;
@@ -124,7 +125,7 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
     set_closing_radii(p, box, params, workspace.closing);
     if (record_reach) workspace.reach.resize(n_old);
     AddToSums<D, E> add{&sums, &p, record_reach ? &workspace.reach : nullptr};
-    for_each_old_cell(p, box, lattice, builder, grid, region, workspace, add);
+    for_each_old_cell(p, box, lattice, builder, grid, region, workspace, add, only);
   }
 
   reduce_sums(sums);
@@ -137,14 +138,17 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
 /// so shares flow towards kept cells along rising mass); a cell with no such neighbour keeps its particle.
 /// `volume(c)` is the volume of cell c; `for_each_neighbour(c, f)` calls f(g) for the cells g next to c.
 /// Fills the keep flags; `handed_on` counts the cells whose share moved.
+/// `part`: on many ranks, the heaviest is every rank's.
 template <int D, class Volume, class ForEachNeighbour>
 void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume, ForEachNeighbour&& for_each_neighbour,
-                          std::size_t& handed_on, std::vector<std::uint8_t>& keep) {
+                          std::size_t& handed_on, std::vector<std::uint8_t>& keep, const RankPart& part = {}) {
   const std::size_t n_cells = S.size();
   keep.resize(n_cells);
   double heaviest = 0.0;
-  if (params.min_mass_ratio > 0.0)
+  if (params.min_mass_ratio > 0.0) {
     for (const auto& c : S.cell) heaviest = std::max(heaviest, c.m);
+    heaviest = part.max(heaviest);
+  }
   const double min_mass = params.min_mass_ratio > 0.0 ? params.min_mass_ratio * heaviest : 0.0;
   rsph::run_parallel(n_cells, [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t c = begin; c < end; ++c)
@@ -270,7 +274,8 @@ void for_each_grid_neighbour(const CellGrid<D>& grid, std::size_t c, F&& f) {
 /// volume, `for_each_neighbour(c, f)` calls f(g) for the grid cells next to it, `site(c)` is its site.
 template <int D, bool E, class Volume, class ForEachNeighbour, class Site>
 void hand_on_and_emit(ParticleSet<D, E>& p, Sums<D>& S, const RemapParams& params, double spacing, Volume&& volume,
-                      ForEachNeighbour&& for_each_neighbour, Site&& site, RemapWorkspace<D>& ws, RemapStats& stats) {
+                      ForEachNeighbour&& for_each_neighbour, Site&& site, RemapWorkspace<D>& ws, RemapStats& stats,
+                      const RankPart& part = {}) {
   auto& keep = ws.keep;
   hand_on_sparse_cells<D>(
       S, params, [&](std::size_t c) { return volume(S.flat(c)); },
@@ -279,7 +284,7 @@ void hand_on_and_emit(ParticleSet<D, E>& p, Sums<D>& S, const RemapParams& param
           if (const std::int64_t e = S.find(g); e >= 0) f(static_cast<std::size_t>(e));
         });
       },
-      stats.dropped_cells, keep);
+      stats.dropped_cells, keep, part);
   auto& order = ws.order;
   order.resize(S.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
@@ -296,23 +301,25 @@ void hand_on_and_emit(ParticleSet<D, E>& p, Sums<D>& S, const RemapParams& param
 /// The end of a remap onto one lattice of congruent cells, in lattice order.
 template <class Lattice, int D, bool E>
 void emit_on_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
-                     const CellGrid<D>& grid, Sums<D>& S, RemapWorkspace<D>& ws, RemapStats& stats) {
+                     const CellGrid<D>& grid, Sums<D>& S, RemapWorkspace<D>& ws, RemapStats& stats,
+                     const RankPart& part = {}) {
   const double cell_volume = lattice.cell_volume();
   hand_on_and_emit(
       p, S, params, lattice.spacing, [&](std::size_t) { return cell_volume; },
       [&](std::size_t c, auto&& f) { for_each_grid_neighbour(grid, c, f); },
-      [&](std::size_t c) { return lattice.site(box, grid.unflat(c)); }, ws, stats);
+      [&](std::size_t c) { return lattice.site(box, grid.unflat(c)); }, ws, stats, part);
 }
 
 /// The end of a remap onto a lattice of per-site cells: each cell's volume for the hand-on the area a full one
 /// holds, its neighbours the sites' own.
 template <class Lattice, bool E, SiteCells Sites>
 void emit_on_lattice(ParticleSet<2, E>& p, const Box<2>&, const Lattice& lattice, const RemapParams& params,
-                     const Sites& sites, Sums<2>& S, RemapWorkspace<2>& ws, RemapStats& stats) {
+                     const Sites& sites, Sums<2>& S, RemapWorkspace<2>& ws, RemapStats& stats,
+                     const RankPart& part = {}) {
   hand_on_and_emit(
       p, S, params, lattice.spacing, [&](std::size_t c) { return sites.nominal_area(c); },
       [&](std::size_t c, auto&& f) { sites.for_each_neighbour(c, f); }, [&](std::size_t c) { return sites.site(c); },
-      ws, stats);
+      ws, stats, part);
 }
 
 /// The new cells a remap sums into: the candidate grid of a lattice of congruent cells, or the sites a
@@ -354,19 +361,20 @@ void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const
 /// Remaps `p` (real particles only, no ghosts) onto `lattice`; returns the statistics. New particles
 /// are stored in lattice order with h = h_over_dx * Delta; u absorbs the kinetic energy lost when the
 /// gas carries it. `region` closes the cells at open edges (region.hpp).
-/// `workspace` (optional) keeps scratch storage between remaps.
+/// `workspace` (optional) keeps scratch storage between remaps. `part`: on many ranks, the old particles whose
+/// cells are built (the sites the others alone would feed are left light or empty) and the reduction over ranks.
 template <class Lattice, class Builder, int D, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
                               const RemapParams& params, const Region& region = {},
-                              RemapWorkspace<D>* workspace = nullptr) {
+                              RemapWorkspace<D>* workspace = nullptr, const RankPart& part = {}) {
   detail::check_remap_input(p, lattice, params);
   RemapWorkspace<D> local;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   const auto grid = detail::new_cells(p, box, lattice, params);
-  auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws);
+  auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws, false, true, part.cells);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
-  detail::emit_on_lattice(p, box, lattice, params, grid, S, ws, stats);
+  detail::emit_on_lattice(p, box, lattice, params, grid, S, ws, stats, part);
   return stats;
 }
 

@@ -21,8 +21,9 @@ struct FirstOrder {
 
   template <class Lattice, class Builder, int D, bool E, class Region>
   RemapStats remap(ParticleSet<D, E>& p, const Box<D>& box, Lattice& lattice, Builder& builder,
-                   const RemapParams& params, const Region& region, RemapWorkspace<D>& ws, Workspace<D>&) const {
-    return remap_onto_lattice(p, box, lattice, builder, params, region, &ws);
+                   const RemapParams& params, const Region& region, RemapWorkspace<D>& ws, Workspace<D>&,
+                   const RankPart& part = {}) const {
+    return remap_onto_lattice(p, box, lattice, builder, params, region, &ws, part);
   }
   /// Figures of a run's remaps beyond the common ones: none.
   template <class Log, class Set>
@@ -41,9 +42,9 @@ struct SecondOrder {
   void validate() const { params.validate(); }
   template <class Lattice, class Builder, int D, bool E, class Region>
   RemapStats remap(ParticleSet<D, E>& p, const Box<D>& box, Lattice& lattice, Builder& builder,
-                   const RemapParams& remap_params, const Region& region, RemapWorkspace<D>& ws,
-                   Workspace<D>& w2) const {
-    return remap_second_order(p, box, lattice, builder, remap_params, params, region, &ws, &w2);
+                   const RemapParams& remap_params, const Region& region, RemapWorkspace<D>& ws, Workspace<D>& w2,
+                   const RankPart& part = {}) const {
+    return remap_second_order(p, box, lattice, builder, remap_params, params, region, &ws, &w2, part);
   }
   /// How often the limiter cut a gradient, how many old cells the thermal floor sent back to first order, and
   /// in how many remaps: set(name, value) for each.

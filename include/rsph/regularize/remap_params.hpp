@@ -5,6 +5,9 @@
 #include "rsph/core/errors.hpp"
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,6 +35,15 @@ struct RemapParams {
     require(min_mass_ratio >= 0.0 && min_mass_ratio < 1.0, "regularization: min_mass_ratio must lie in [0, 1)");
     require(dense_cells_per_particle >= 0.0, "regularization: dense_cells_per_particle must not be negative");
   }
+};
+
+/// A remap of one rank's part of a decomposed set (mpi/decomposition.hpp): the old particles whose cells it
+/// builds (ascending; empty: every one), and the largest of a value over every rank (the heaviest new cell, which
+/// min_mass_ratio scales, must be the whole set's). Empty in one process: the whole set, nothing to reduce.
+struct RankPart {
+  std::span<const std::uint32_t> cells;
+  std::function<double(double)> max_over_ranks;
+  double max(double v) const { return max_over_ranks ? max_over_ranks(v) : v; }
 };
 
 /// What a remap carries into one new cell: mass (eq. 6), momentum (eq. 8), total energy m (e + v^2/2) (eq. 9

@@ -25,6 +25,9 @@ template <class S>
     return kernel::grad_W_inv_h<Kernel, D>(r_ab, r, kernel::inv_h_ab(h_a, inv_h_a, h_b));
 }
 
+template <class P, int D>
+void stress_images(const P& p, const Box<D>& box, std::vector<Mat<D>>& S_over_rho2);
+
 /// S / rho^2 of every point (real and ghosts) from `term`'s stress of the velocity gradient, over current
 /// neighbour lists and densities; a mirror ghost sees the stress reflected, S' = M S M.
 template <class S, class P, class Term>
@@ -50,6 +53,14 @@ void stress_over_rho2(const P& p, const Box<S::dim>& box, const neighbors::Neigh
     const double rho = p.rho[a];
     S_over_rho2[a] = term.stress(G, rho) / (rho * rho);
   }
+  stress_images(p, box, S_over_rho2);
+}
+
+/// The ghosts' S / rho^2 from their sources' (again after a decomposition refreshed its halos, the sources of
+/// images made of them): a mirror ghost sees the stress reflected, S' = M S M.
+template <class P, int D>
+void stress_images(const P& p, const Box<D>& box, std::vector<Mat<D>>& S_over_rho2) {
+  const std::size_t n = p.n_real;
   for (std::size_t g = n; g < p.size_with_ghosts(); ++g) {
     const Vec<D> sign = boundary::mirror_signs<D>(boundary::mirror_flips(p, box, g));
     S_over_rho2[g] = sign.asDiagonal() * S_over_rho2[p.ghost_source[g - n]] * sign.asDiagonal();

@@ -61,6 +61,8 @@ struct CellStore {
   std::vector<Mat<D>> inertia;   ///< int (x - x_c)(x - x_c)^T dA
 
   std::size_t size() const { return volume.size(); }
+  /// Whether cell a was built (a remap may build some cells only); one not built has no volume.
+  bool built(std::size_t a) const { return volume[a] > 0.0; }
   std::span<const Vec<D>> vertices_of(std::size_t a) const {
     return {vertices.data() + start[a], start[a + 1] - start[a]};
   }
@@ -166,17 +168,18 @@ void set_geometry(CellStore<D>& s, std::size_t a, const PieceMoments<D>& m) {
   s.inertia[a] = m.second - m.area * s.centroid[a] * s.centroid[a].transpose();
 }
 
-/// 2D: builds every old cell once (closed at open edges and by the region) and finds its faces.
+/// 2D: builds every old cell (or those `only` names) once (closed at open edges and by the region) and finds its
+/// faces.
 template <class Builder, bool E, class Region>
 void collect_cells(const ParticleSet<2, E>& p, const Box<2>& box, Builder& builder, const RemapParams& params,
                    const Region& region, std::vector<double>& closing, CellsByThread& by_thread,
-                   neighbors::CellList<2>& lookup, CellStore<2>& s) {
+                   neighbors::CellList<2>& lookup, CellStore<2>& s, std::span<const std::uint32_t> only = {}) {
   const std::size_t n = p.n_real;
   detail::set_closing_radii(p, box, params, closing);
   by_thread.parts.resize(static_cast<std::size_t>(std::max(geometry::builder_threads(), max_threads())));
   KeepCells<Region> keep{&region, &p.x, &by_thread};
   keep.restart();
-  builder.build(p.x, box, closing, keep);
+  builder.build(p.x, box, closing, keep, only);
   s.start.assign(n + 1, 0);
   for (const auto& t : by_thread.parts)
     for (std::size_t k = 0; k < t.who.size(); ++k) s.start[t.who[k] + 1] = t.count[k];
@@ -193,6 +196,12 @@ void collect_cells(const ParticleSet<2, E>& p, const Box<2>& box, Builder& build
   lookup.build(p.x, geometry::detail::mean_spacing(p.x, box));
   run_parallel(n, [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t a = begin; a < end; ++a) {
+      if (s.start[a] == s.start[a + 1]) {  // not built
+        s.volume[a] = 0.0;
+        s.centroid[a].setZero();
+        s.inertia[a].setZero();
+        continue;
+      }
       set_geometry<2>(s, a, piece_moments(geometry::moments(s.polygon(a))));
       const std::span<Face<2>> faces(s.faces.data() + s.start[a], s.start[a + 1] - s.start[a]);
       find_faces(p, box, lookup, a, s.vertices_of(a), faces);

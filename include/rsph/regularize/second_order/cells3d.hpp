@@ -109,27 +109,28 @@ struct KeepCells3 {
   }
 };
 
-/// 3D: builds every old cell once (closed by the region), keeps its geometry and faces in ws.cells and lists its pieces
-/// on the cells of `grid` (ws.threads[t].pieces, ws.piece_*).
+/// 3D: builds every old cell (or those `only` names) once (closed by the region), keeps its geometry and faces in
+/// ws.cells and lists its pieces on the cells of `grid` (ws.threads[t].pieces, ws.piece_*); a cell not built has no
+/// volume and no pieces.
 template <class Lattice, class Builder, bool E, class Region, class W>
 void collect_cells_and_pieces(const ParticleSet<3, E>& p, const Box<3>& box, const Lattice& lattice, Builder& builder,
                               const RemapParams& params, const Region& region, const detail::CellGrid<3>& grid,
-                              std::vector<double>& closing, W& ws) {
+                              std::vector<double>& closing, W& ws, std::span<const std::uint32_t> only = {}) {
   const std::size_t n = p.n_real;
   detail::set_closing_radii(p, box, params, closing);
   const auto n_threads = static_cast<std::size_t>(std::max(geometry::builder_threads(), max_threads()));
   ws.faces_by_thread.parts.resize(n_threads);
   ws.threads.resize(n_threads);
-  ws.piece_thread.resize(n);
-  ws.piece_first.resize(n);
-  ws.piece_count.resize(n);
+  ws.piece_thread.assign(n, 0);
+  ws.piece_first.assign(n, 0);
+  ws.piece_count.assign(n, 0);
   CellStore<3>& s = ws.cells;
-  s.volume.resize(n);
+  s.volume.assign(n, 0.0);
   s.centroid.resize(n);
   s.inertia.resize(n);
   KeepCells3<Lattice, E, Region, W> keep{&p, &lattice, &box, &grid, &region, &ws};
   keep.restart();
-  builder.build(p.x, box, closing, keep);
+  builder.build(p.x, box, closing, keep, only);
   s.start.assign(n + 1, 0);
   for (const auto& t : ws.faces_by_thread.parts)
     for (std::size_t k = 0; k < t.who.size(); ++k) s.start[t.who[k] + 1] = t.count[k];

@@ -121,11 +121,12 @@ void list_pieces(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& l
       auto& own = ws.threads[static_cast<std::size_t>(t)].pieces;
       for (std::size_t a = begin; a < end; ++a) {
         const std::size_t first = own.flat.size();
-        for_each_piece(lattice, box, grid, a, ws.cells.polygon(a), p.x[a],
-                       [&](std::size_t c, const PieceMoments<2>& pm) {
-                         own.flat.push_back(c);
-                         own.moments.push_back(pm);
-                       });
+        if (ws.cells.built(a))
+          for_each_piece(lattice, box, grid, a, ws.cells.polygon(a), p.x[a],
+                         [&](std::size_t c, const PieceMoments<2>& pm) {
+                           own.flat.push_back(c);
+                           own.moments.push_back(pm);
+                         });
         listed(t, a, first);
       }
     });

@@ -44,12 +44,13 @@ void reconstruct_density(const ParticleSet<D, E>& p, const CellStore<D>& s, std:
     for (std::size_t a = begin; a < end; ++a) {
       Reconstruction<D>& r = recon[a];
       r = Reconstruction<D>{};
+      if (!s.built(a)) continue;
       r.x_m = s.centroid[a];
       const double rho = p.m[a] / s.volume[a];
       r.range.rho.add(rho);
       LeastSquares<D, 1> fit;
       for (const auto& f : s.faces_of(a)) {
-        if (f.b == CellStore<D>::no_neighbour) continue;
+        if (f.b == CellStore<D>::no_neighbour || !s.built(f.b)) continue;
         const double rho_b = p.m[f.b] / s.volume[f.b];
         r.range.rho.add(rho_b);
         fit.add(Vec<D>(f.d + s.centroid[f.b] - s.centroid[a]), f.length, Eigen::Matrix<double, 1, 1>(rho_b - rho));
@@ -86,7 +87,7 @@ void reconstruct_motion(const ParticleSet<D, E>& p, const CellStore<D>& s, std::
       extend(qa);
       LeastSquares<D, D + 1> fit;
       for (const auto& f : s.faces_of(a)) {
-        if (f.b == CellStore<D>::no_neighbour) continue;
+        if (f.b == CellStore<D>::no_neighbour || !s.built(f.b)) continue;
         const Fields qb = fields(f.b);
         extend(qb);
         fit.add(Vec<D>(f.d + recon[f.b].x_m - r.x_m), f.length, Fields(qb - qa));
@@ -184,6 +185,7 @@ void hand_out_all(const ParticleSet<D, E>& p, bool limit, std::size_t n_cells, W
   run_parallel(p.n_real, [&](int t, std::size_t begin, std::size_t end) {
     const auto tt = static_cast<std::size_t>(t);
     for (std::size_t a = begin; a < end; ++a) {
+      if (!ws.cells.built(a)) continue;
       const auto& listed = ws.threads[ws.piece_thread[a]].pieces;
       const std::span<const std::size_t> flat(listed.flat.data() + ws.piece_first[a], ws.piece_count[a]);
       const std::span<const PieceMoments<D>> moments(listed.moments.data() + ws.piece_first[a], ws.piece_count[a]);
@@ -263,13 +265,14 @@ template <class Lattice, class Builder, int D, bool E, class Region, class Grid>
 detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
                                    Builder& builder, const RemapParams& params, const SecondOrderParams& second,
                                    const Region& region, const Grid& grid, RemapWorkspace<D>& ws, Workspace<D>& w2,
-                                   RemapStats& stats, bool allow_sparse = true) {
+                                   RemapStats& stats, bool allow_sparse = true,
+                                   std::span<const std::uint32_t> only = {}) {
   if constexpr (D == 1)
     collect_cells(p, box, lattice, params, grid, w2.cells);
   else if constexpr (D == 2)
-    collect_cells(p, box, builder, params, region, ws.closing, w2.by_thread, w2.lookup, w2.cells);
+    collect_cells(p, box, builder, params, region, ws.closing, w2.by_thread, w2.lookup, w2.cells, only);
   else
-    collect_cells_and_pieces(p, box, lattice, builder, params, region, grid, ws.closing, w2);
+    collect_cells_and_pieces(p, box, lattice, builder, params, region, grid, ws.closing, w2, only);
   w2.recon.resize(p.n_real);
   reconstruct_density(p, w2.cells, w2.recon);
   reconstruct_motion(p, w2.cells, w2.recon);
@@ -294,11 +297,14 @@ detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box
 
 /// The second-order remap of `p` onto `lattice`: as remap_onto_lattice (the same new particles, the same
 /// hand-on of nearly empty cells), each old cell handing out its linear reconstruction instead of its
-/// mean. `ws2` (optional) keeps the cells and reconstructions' storage between remaps.
+/// mean. `ws2` (optional) keeps the cells and reconstructions' storage between remaps. `part`: on many ranks, the
+/// old particles whose cells are built (2D and 3D: a cell not built has no volume, hands out nothing and is no
+/// neighbour in the fits) and the reduction over ranks.
 template <class Lattice, class Builder, int D, bool E, class Region = region::Unbounded>
 RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
                               const RemapParams& params, const SecondOrderParams& second, const Region& region = {},
-                              RemapWorkspace<D>* workspace = nullptr, second_order::Workspace<D>* ws2 = nullptr) {
+                              RemapWorkspace<D>* workspace = nullptr, second_order::Workspace<D>* ws2 = nullptr,
+                              const RankPart& part = {}) {
   static_assert(check_closing_region<Region, D>());
   static_assert(D > 1 || !Region::clips, "closing regions are for 2D and 3D cells");
   detail::check_remap_input(p, lattice, params);
@@ -309,8 +315,9 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   second_order::Workspace<D>& w2 = ws2 ? *ws2 : local2;
   const auto grid = detail::new_cells(p, box, lattice, params);
   RemapStats stats;
-  second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2, stats);
-  detail::emit_on_lattice(p, box, lattice, params, grid, ws.sums[0], ws, stats);
+  second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2, stats, true,
+                                  part.cells);
+  detail::emit_on_lattice(p, box, lattice, params, grid, ws.sums[0], ws, stats, part);
   return stats;
 }
 

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace rsph::regularize {
@@ -16,7 +17,8 @@ template <int D, class Criterion, class Builder, bool E, class Region = region::
 RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                               Builder& builder, const RemapParams& params, const SecondOrderParams& second,
                               const Region& region = {}, RemapWorkspace<D>* workspace = nullptr,
-                              second_order::Workspace<D>* ws2 = nullptr) {
+                              second_order::Workspace<D>* ws2 = nullptr, const RankPart& part = {}) {
+  require(part.cells.empty() && !part.max_over_ranks, "a multi-level lattice remaps in one process");
   ml.validate();
   second.validate();
   RemapWorkspace<D> local;
