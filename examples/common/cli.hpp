@@ -153,6 +153,18 @@ inline std::filesystem::path resume_output(const std::filesystem::path& dir, boo
 }
 
 /// Parses argv; returns false when --help was shown. Unknown flags throw with their name.
+/// How to run a program on many ranks, for --help.
+inline std::string many_ranks_help(const std::string& program) {
+#ifdef RSPH_WITH_MPI
+  return "On many ranks: mpiexec -n 4 " + program +
+         " [options] (the same answers as one rank; threads beside ranks need mpiexec --bind-to none).";
+#else
+  return "On many ranks: mpiexec -n 4 " + program +
+         " [options], in a build with MPI and Zoltan (scripts/setup-deps.sh installs them); this one runs in one "
+         "process.";
+#endif
+}
+
 inline bool parse(int argc, char** argv, const po::options_description& desc, po::variables_map& vm,
                   const std::string& usage) {
   po::store(po::parse_command_line(argc, argv, desc), vm);
@@ -168,11 +180,14 @@ inline bool parse(int argc, char** argv, const po::options_description& desc, po
     po::store(po::parse_config_file<char>(file.c_str(), desc), vm);
   }
   if (vm.count("help")) {
-    fmt::print("{}\n\n{}", usage, [&] {
-      std::ostringstream s;
-      s << desc;
-      return s.str();
-    }());
+    fmt::print(
+        "{}\n\n{}\n{}\n", usage,
+        [&] {
+          std::ostringstream s;
+          s << desc;
+          return s.str();
+        }(),
+        many_ranks_help(std::filesystem::path(argv[0]).filename().string()));
     return false;
   }
   po::notify(vm);
@@ -337,8 +352,8 @@ inline int guarded_main(const char* program, const std::function<int()>& body) {
   try {
 #ifndef RSPH_WITH_MPI  // a program built for one process, started as one of many, would run many times over
     require(!started_as_one_of_many(), std::string(program) +
-                                           " runs in one process: start it without mpiexec (or with -n 1); of the "
-                                           "programs, rsph-sedov runs on many ranks");
+                                           " was built without MPI and runs in one process: start it without mpiexec "
+                                           "(or with -n 1), or build with MPI and Zoltan (scripts/setup-deps.sh)");
 #endif
     return body();
   } catch (const po::error& e) {
@@ -360,13 +375,22 @@ inline int guarded_main(const char* program, const std::function<int()>& body) {
 }
 
 /// A program's main: parse(argc, argv) gives the options, or none after --help; run(options) does the work.
-/// Errors become one message and an exit code (guarded_main).
-template <class Parse, class Run>
-int run_program(const char* program, int argc, char** argv, Parse&& parse, Run&& run) {
+/// A program's body under MPI where built with it: rank 0 reports, and an error on any rank ends them all
+/// with its exit code (guarded_main).
+template <class Body>
+int program_main(const char* program, int& argc, char**& argv, Body&& body) {
   wait_passively();  // before MPI starts
   MpiSession mpi(argc, argv);
   if (!on_root() && !std::freopen("/dev/null", "w", stdout)) return 4;  // rank 0 reports
-  return guarded_main(program, [&] {
+  const int code = guarded_main(program, body);
+  if (code != 0) mpi.abort_all(code);
+  return code;
+}
+
+/// Errors become one message and an exit code (guarded_main).
+template <class Parse, class Run>
+int run_program(const char* program, int argc, char** argv, Parse&& parse, Run&& run) {
+  return program_main(program, argc, argv, [&] {
     const auto options = parse(argc, argv);
     return options ? run(*options) : 0;
   });

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <span>
+#include <string>
 #include <utility>
 #ifdef RSPH_WITH_MPI
 #include "rsph/mpi/decomposition.hpp"
@@ -38,6 +39,17 @@ class MpiSession {
   ~MpiSession() {
 #ifdef RSPH_WITH_MPI
     if (owned_) MPI_Finalize();
+#endif
+  }
+  /// After an error on this rank: ends every rank with `code`, which may otherwise wait for this one in a
+  /// collective call forever.
+  void abort_all(int code) const {
+#ifdef RSPH_WITH_MPI
+    int n = 1;
+    MPI_Comm_size(MPI_COMM_WORLD, &n);
+    if (n > 1) MPI_Abort(MPI_COMM_WORLD, code);
+#else
+    (void)code;
 #endif
   }
   MpiSession(const MpiSession&) = delete;
@@ -76,6 +88,11 @@ inline int rank_count() {
 }
 inline bool on_root() { return this_rank() == 0; }
 
+/// Refuses more than one rank for `what` (in words), which runs in one process as yet.
+inline void in_one_process(const std::string& what) {
+  require(rank_count() == 1, what + " runs in one process as yet: start it without mpiexec (or with -n 1)");
+}
+
 /// f(domain) with the decomposition of the ranks, or f() without MPI: a scene's make_ function takes the
 /// decomposition as its last term.
 template <int D, class F>
@@ -107,6 +124,16 @@ template <class Sim>
 decltype(auto) particles_on_root(const Sim& sim) {
   if constexpr (Sim::distributed)
     return sim.domain().gather_on_root(sim.particles());
+  else
+    return (sim.particles());
+}
+
+/// The particles of every rank on every rank, or the set itself in one process: for a measure that needs the
+/// whole field at once.
+template <class Sim>
+decltype(auto) particles_everywhere(const Sim& sim) {
+  if constexpr (Sim::distributed)
+    return sim.domain().gather_everywhere(sim.particles());
   else
     return (sim.particles());
 }

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rsph::examples {
@@ -144,15 +145,19 @@ double remove_particles(Sim& sim, Gone&& gone, std::size_t& removed) {
   auto& p = sim.particles();
   bool any = false;
   for (std::size_t a = 0; a < p.n_real && !any; ++a) any = gone(p.x[a]);
+  if constexpr (Sim::distributed)
+    any = std::as_const(sim).domain().any(any);  // every rank recomputes the rates, or none
   if (!any) return 0.0;
-  double mass = 0.0;
-  removed += p.erase_if([&](std::size_t a) {
+  std::array<double, 2> gone_here{};  // mass, count
+  gone_here[1] = static_cast<double>(p.erase_if([&](std::size_t a) {
     const bool out = gone(p.x[a]);
-    if (out) mass += p.m[a];
+    if (out) gone_here[0] += p.m[a];
     return out;
-  });
+  }));
+  if constexpr (Sim::distributed) std::as_const(sim).domain().sum_in_place(gone_here);
+  removed += static_cast<std::size_t>(gone_here[1]);
   sim.compute_rates();
-  return mass;
+  return gone_here[0];
 }
 
 /// Relative change of a conserved quantity, guarded against a zero reference.

@@ -106,6 +106,21 @@ RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_st
   return cost;
 }
 
+/// A snapshot of `sim` at `path` with the positions of `objects` (io::write_snapshot); on many ranks the
+/// particles are gathered to rank 0, which writes the file.
+template <class Sim>
+void write_snapshot(const std::filesystem::path& path, const Sim& sim, const std::string& units,
+                    std::vector<std::pair<std::string, std::vector<double>>> objects = {}) {
+  if constexpr (Sim::distributed) {
+    const auto all = particles_on_root(sim);
+    auto info = io::describe_run(sim.box(), sim.eos(), units);
+    info.objects = std::move(objects);
+    if (on_root()) io::write_snapshot(path, all, sim.time(), sim.steps(), info);
+  } else {
+    io::write_snapshot(path, sim, units, std::move(objects));
+  }
+}
+
 /// The snapshots of a run in `dir`: snap_00000.h5, snap_00001.h5, ... in the order written.
 class Snapshots {
  public:
@@ -115,14 +130,7 @@ class Snapshots {
   /// On many ranks the particles are gathered to rank 0, which writes the file.
   template <class Sim>
   void write(const Sim& sim) {
-    const auto path = dir_ / io::snapshot_name(next_++);
-    if constexpr (Sim::distributed) {
-      const auto all = particles_on_root(sim);
-      if (on_root())
-        io::write_snapshot(path, all, sim.time(), sim.steps(), io::describe_run(sim.box(), sim.eos(), units_));
-    } else {
-      io::write_snapshot(path, sim, units_);
-    }
+    write_snapshot(dir_ / io::snapshot_name(next_++), sim, units_);
   }
   template <class Archive>
   void checkpoint(Archive& ar) {

@@ -81,47 +81,49 @@ struct PulseRun {
 template <int D, class Kernel>
 void run_case(scenes::DriftingPulseParams s, const std::vector<int>& counts, const std::filesystem::path& dir,
               ex::Checkpoints& checkpoints, PulseRun& run) {
-  ex::with_remap(s.remap, [&](auto order) {
-    auto sim = scenes::make_drifting_pulse<D, Kernel>(s, order);
-    const double m0 = sim.totals().mass;
-    const auto case_dir = dir / ("shift_" + shift_tag(s.shift));
-    io::ensure_directory(case_dir);
-    run.results.emplace_back();
-    std::vector<ex::AfterRegularizations> stops;
-    for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
-    ex::Snapshots snapshots(case_dir);
-    const auto case_part = checkpoints.add("case", [&](io::Archive& ar) { snapshots.checkpoint(ar); });
-    const auto cost = ex::run_stops(
-        sim, stops, ex::NoHook{},
-        [&](const auto& sm, int k) {
-          if (k < 0) return;
-          const int count = counts[static_cast<std::size_t>(k)];
-          const auto x = scenes::comoving_positions(sm, s.v_drift);
-          const auto& p = sm.particles();
-          io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
-          for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
-          csv.close();
-          snapshots.write(sm);
-          const auto [axes, w] = scenes::pulse_widths(sm, s);
-          run.results.back().widths.push_back(w);
-          std::vector<double> row{s.shift, static_cast<double>(count), w};
-          if constexpr (D > 1) {
-            auto& all = run.results.back().axes;
-            all.insert(all.end(), axes.begin(), axes.end());
-            row.insert(row.end(), axes.begin(), axes.end());
-          }
-          run.widths.row(row);
-        },
-        &checkpoints);
-    auto& result = run.results.back();
-    result.mass_error = ex::relative_change(sim.totals().mass, m0);
-    result.regularizations = sim.regularizations();
-    result.kinetic = sim.kinetic_energy_removed();
-    run.steps += cost.steps;
-    run.updates += cost.updates;
-    run.reg_seconds += cost.phases.regularization;
-    fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", shift_tag(s.shift),
-               counts.back(), scenes::pulse_widths(sim, s).second, result.mass_error);
+  ex::with_ranks<D>([&](auto... domain) {
+    ex::with_remap(s.remap, [&](auto order) {
+      auto sim = scenes::make_drifting_pulse<D, Kernel>(s, order, domain...);
+      const double m0 = sim.totals().mass;
+      const auto case_dir = dir / ("shift_" + shift_tag(s.shift));
+      io::ensure_directory(case_dir);
+      run.results.emplace_back();
+      std::vector<ex::AfterRegularizations> stops;
+      for (const int c : counts) stops.push_back({static_cast<std::uint64_t>(c)});
+      ex::Snapshots snapshots(case_dir);
+      const auto case_part = checkpoints.add("case", [&](io::Archive& ar) { snapshots.checkpoint(ar); });
+      const auto cost = ex::run_stops(
+          sim, stops, ex::NoHook{},
+          [&](const auto& sm, int k) {
+            if (k < 0) return;
+            const int count = counts[static_cast<std::size_t>(k)];
+            decltype(auto) p = ex::particles_everywhere(sm);  // the whole profile, on every rank
+            const auto x = scenes::comoving_positions(p, sm.time(), s.v_drift);
+            io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
+            for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
+            csv.close();
+            snapshots.write(sm);
+            const auto [axes, w] = scenes::pulse_widths(sm, s);
+            run.results.back().widths.push_back(w);
+            std::vector<double> row{s.shift, static_cast<double>(count), w};
+            if constexpr (D > 1) {
+              auto& all = run.results.back().axes;
+              all.insert(all.end(), axes.begin(), axes.end());
+              row.insert(row.end(), axes.begin(), axes.end());
+            }
+            run.widths.row(row);
+          },
+          &checkpoints);
+      auto& result = run.results.back();
+      result.mass_error = ex::relative_change(sim.totals().mass, m0);
+      result.regularizations = sim.regularizations();
+      result.kinetic = sim.kinetic_energy_removed();
+      run.steps += cost.steps;
+      run.updates += cost.updates;
+      run.reg_seconds += cost.phases.regularization;
+      fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", shift_tag(s.shift),
+                 counts.back(), scenes::pulse_widths(sim, s).second, result.mass_error);
+    });
   });
 }
 

@@ -41,13 +41,15 @@ template <class Order = regularize::FirstOrder, int D = 1>
 using DriftRegularizer =
     regularize::LatticeRegularizer<lattice::Cartesian<D>, schedule::EveryT,
                                    typename geometry::DefaultCellBuilder<D>::type, region::Unbounded, Order>;
-template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder, int D = 1>
-using DriftingPulse = Simulation<D, Kernel, eos::Pressureless, DriftRegularizer<Order, D>>;
+/// Extra: a domain decomposition for many ranks (examples::with_ranks), or nothing.
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder, int D = 1, class... Extra>
+using DriftingPulse = Simulation<D, Kernel, eos::Pressureless, DriftRegularizer<Order, D>, Extra...>;
 
 /// The lattice of cells^D sites, density `contrast` in the pulse of pulse_width^D sites at the centre and 1
 /// elsewhere, every particle drifting with v_d along each axis.
-template <int D = 1, class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
-DriftingPulse<Kernel, Order, D> make_drifting_pulse(const DriftingPulseParams& s, Order order = {}) {
+template <int D = 1, class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder, class... Extra>
+DriftingPulse<Kernel, Order, D, Extra...> make_drifting_pulse(const DriftingPulseParams& s, Order order = {},
+                                                              Extra... extra) {
   s.validate();
   const double dx = s.spacing();
   ParticleSet<D, false> p;
@@ -64,32 +66,31 @@ DriftingPulse<Kernel, Order, D> make_drifting_pulse(const DriftingPulseParams& s
   for (int k = 0; k < D; ++k) box.edge[static_cast<std::size_t>(k)] = Edge::periodic;
   TimeStepParams ts;
   ts.dt_max = s.T_reg();  // force-free: one step per regularization
-  return DriftingPulse<Kernel, Order, D>(
+  return DriftingPulse<Kernel, Order, D, Extra...>(
       std::move(p), box, eos::Pressureless{},
       DriftRegularizer<Order, D>(lattice::Cartesian<D>{dx}, schedule::EveryT{s.T_reg()},
                                  {.remap = {s.h_over_dx}, .order = order}),
-      ts);
+      ts, std::move(extra)...);
 }
 
-/// Positions along `axis` in the frame moving with the drift, wrapped so the pulse sits where it started.
-template <class Sim>
-std::vector<double> comoving_positions(const Sim& sim, double v_drift, int axis = 0) {
+/// Positions along `axis` in the frame moving with the drift at time t, wrapped so the pulse sits where it started.
+template <class P>
+std::vector<double> comoving_positions(const P& p, double t, double v_drift, int axis = 0) {
   std::vector<double> x;
-  const auto& p = sim.particles();
   for (std::size_t a = 0; a < p.n_real; ++a) {
-    double xc = p.x[a][axis] - v_drift * sim.time();
+    double xc = p.x[a][axis] - v_drift * t;
     xc -= std::floor(xc);
     x.push_back(xc);
   }
   return x;
 }
 
-/// Pulse width along `axis`: sqrt of the second central moment of the excess mass over the background, in Delta.
-template <class Sim>
-double pulse_width_mass(const Sim& sim, const DriftingPulseParams& s, int axis = 0) {
-  const auto x = comoving_positions(sim, s.v_drift, axis);
-  const auto& p = sim.particles();
-  const double background = std::pow(s.spacing(), Sim::dim);  // background mass per particle (rho = 1)
+/// Pulse width along `axis`: sqrt of the second central moment of the excess mass over the background, in
+/// Delta, of a whole set of particles at time t.
+template <class P>
+double pulse_width_mass(const P& p, double t, const DriftingPulseParams& s, int axis = 0) {
+  const auto x = comoving_positions(p, t, s.v_drift, axis);
+  const double background = std::pow(s.spacing(), P::dim);  // background mass per particle (rho = 1)
   double M = 0.0, mean = 0.0, var = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) {
     M += p.m[a] - background;
@@ -100,13 +101,20 @@ double pulse_width_mass(const Sim& sim, const DriftingPulseParams& s, int axis =
   return std::sqrt(std::max(var / M, 0.0)) / s.spacing();
 }
 
+/// The same of a simulation, its particles on every rank gathered first.
+template <class Sim>
+double pulse_width_mass(const Sim& sim, const DriftingPulseParams& s, int axis = 0) {
+  return pulse_width_mass(examples::particles_everywhere(sim), sim.time(), s, axis);
+}
+
 /// The widths along every axis, and their root mean square (the 1D width in 1D).
 template <class Sim>
 std::pair<std::vector<double>, double> pulse_widths(const Sim& sim, const DriftingPulseParams& s) {
+  decltype(auto) p = examples::particles_everywhere(sim);
   std::vector<double> w;
   double sum2 = 0.0;
   for (int k = 0; k < Sim::dim; ++k) {
-    w.push_back(pulse_width_mass(sim, s, k));
+    w.push_back(pulse_width_mass(p, sim.time(), s, k));
     sum2 += w.back() * w.back();
   }
   return {w, std::sqrt(sum2 / Sim::dim)};

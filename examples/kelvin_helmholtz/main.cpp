@@ -72,7 +72,7 @@ int run_dim(Options opt) {
   };
   io::Json scheme;
   auto on_end = [&](const auto& sim) {
-    io::write_snapshot(dir / io::snapshot_name(1), sim, "dimensionless code units");
+    ex::write_snapshot(dir / io::snapshot_name(1), sim, "dimensionless code units");
     ex::write_scheme(scheme, sim);
   };
   {

@@ -9,6 +9,7 @@
 #include "common/runner.hpp"
 #include "rsph/rsph.hpp"
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <numbers>
@@ -80,9 +81,11 @@ struct KelvinHelmholtzParams {
 
 /// The seeded mode's amplitude (McNally, Lyra & Passy 2012 eqs. 10-13, one interface at y = 0.25):
 /// M = 2 sqrt((s/d)^2 + (c/d)^2), s, c = sum V v_y {sin, cos}(k x) e^(-k |y - 0.25|), d = sum V e^(-k |y - 0.25|).
+/// The sums {s, c, d} over a set of particles, and M from them (summed over ranks between the two).
 template <class P>
-double mode_amplitude(const P& p, double k) {
-  double s = 0.0, c = 0.0, d = 0.0;
+std::array<double, 3> mode_sums(const P& p, double k) {
+  std::array<double, 3> sums{};
+  auto& [s, c, d] = sums;
   for (std::size_t a = 0; a < p.n_real; ++a) {
     const double V = p.m[a] / p.rho[a];
     const double w = V * std::exp(-k * std::abs(p.x[a][1] - 0.25));
@@ -90,27 +93,41 @@ double mode_amplitude(const P& p, double k) {
     c += w * p.v[a][1] * std::cos(k * p.x[a][0]);
     d += w;
   }
+  return sums;
+}
+inline double mode_amplitude(const std::array<double, 3>& sums) {
+  const auto [s, c, d] = sums;
   return 2.0 * std::sqrt((s / d) * (s / d) + (c / d) * (c / d));
+}
+template <class P>
+double mode_amplitude(const P& p, double k) {
+  return mode_amplitude(mode_sums(p, k));
 }
 
 /// Momentum thickness of the shear layer, theta = integral of (1/4 - (<v_x> / dv)^2) dy with <v_x> the
 /// volume-weighted mean over rows Delta high: 0 for the sharp initial layer, delta / 2 for a layer
 /// (dv / 2) tanh(y / delta). What the flow's own mixing and the method's dissipation have widened it to.
+/// The rows' sums of V and V v_x (rows first), and theta from them.
 template <class P>
-double momentum_thickness(const P& p, const KelvinHelmholtzParams& s) {
+std::vector<double> layer_sums(const P& p, const KelvinHelmholtzParams& s) {
   const Box<2> box = s.box();  // the rows along y, in 2D and 3D alike
   const auto rows = static_cast<std::size_t>(s.cells / 2);
   const double dy = box.size()[1] / static_cast<double>(rows);
-  std::vector<double> V(rows, 0.0), Vv(rows, 0.0);
+  std::vector<double> sums(2 * rows, 0.0);
   for (std::size_t a = 0; a < p.n_real; ++a) {
     const auto row = std::min(rows - 1, static_cast<std::size_t>(std::max(0.0, (p.x[a][1] - box.lo[1]) / dy)));
     const double vol = p.m[a] / p.rho[a];
-    V[row] += vol;
-    Vv[row] += vol * p.v[a][0];
+    sums[row] += vol;
+    sums[rows + row] += vol * p.v[a][0];
   }
+  return sums;
+}
+inline double momentum_thickness(const std::vector<double>& sums, const KelvinHelmholtzParams& s) {
+  const std::size_t rows = sums.size() / 2;
+  const double dy = s.box().size()[1] / static_cast<double>(rows);
   double theta = 0.0;
   for (std::size_t j = 0; j < rows; ++j)
-    if (V[j] > 0.0) theta += (0.25 - std::pow(Vv[j] / (V[j] * s.dv), 2)) * dy;
+    if (sums[j] > 0.0) theta += (0.25 - std::pow(sums[rows + j] / (sums[j] * s.dv), 2)) * dy;
   return theta;
 }
 
@@ -178,9 +195,11 @@ struct ContactMeasures {
   double mixed_area = 0.0, pressure_error = 0.0;
 };
 
+/// {area, mixed area, mass, mass-weighted squares of P / P_0 - 1} over a set of particles.
 template <class P>
-ContactMeasures contact_measures(const P& p, const KelvinHelmholtzParams& s) {
-  double area = 0.0, mixed = 0.0, mass = 0.0, squares = 0.0;
+std::array<double, 4> contact_sums(const P& p, const KelvinHelmholtzParams& s) {
+  std::array<double, 4> sums{};
+  auto& [area, mixed, mass, squares] = sums;
   for (std::size_t a = 0; a < p.n_real; ++a) {
     const double V = p.m[a] / p.rho[a], dp = p.P[a] / s.P - 1.0;
     area += V;
@@ -188,6 +207,27 @@ ContactMeasures contact_measures(const P& p, const KelvinHelmholtzParams& s) {
     mass += p.m[a];
     squares += p.m[a] * dp * dp;
   }
+  return sums;
+}
+
+/// The scene's measures of a simulation, its particles' sums taken over every rank.
+template <class Sim>
+double measure_amplitude(const Sim& sim, const KelvinHelmholtzParams& s) {
+  auto sums = mode_sums(sim.particles(), s.k);
+  examples::sum_over_ranks(sim, sums);
+  return mode_amplitude(sums);
+}
+template <class Sim>
+double measure_thickness(const Sim& sim, const KelvinHelmholtzParams& s) {
+  auto sums = layer_sums(sim.particles(), s);
+  examples::sum_over_ranks(sim, sums);
+  return momentum_thickness(sums, s);
+}
+template <class Sim>
+ContactMeasures measure_contact(const Sim& sim, const KelvinHelmholtzParams& s) {
+  auto sums = contact_sums(sim.particles(), s);
+  examples::sum_over_ranks(sim, sums);
+  const auto [area, mixed, mass, squares] = sums;
   return {mixed / area, std::sqrt(squares / mass)};
 }
 
@@ -225,8 +265,8 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
   const double E0 = sim.totals().total_energy();
   auto record = [&](const auto& sm) {
     r.t.push_back(sm.time());
-    r.amplitude.push_back(mode_amplitude(sm.particles(), s.k));
-    r.thickness.push_back(momentum_thickness(sm.particles(), s));
+    r.amplitude.push_back(measure_amplitude(sm, s));
+    r.thickness.push_back(measure_thickness(sm, s));
   };
   record(sim);
   r.seed = r.amplitude.front();
@@ -240,8 +280,8 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
   on_end(sim);
   r.amplitude_final = r.amplitude.back();
   if constexpr (Sim::dim == 2)
-    if (s.chi > 1.0) r.folds = interface_folds(sim.particles(), s);
-  r.contact = contact_measures(sim.particles(), s);
+    if (s.chi > 1.0) r.folds = interface_folds(examples::particles_everywhere(sim), s);
+  r.contact = measure_contact(sim, s);
   r.growth_rate = fitted_growth_rate(r.t, r.amplitude, 0.1 * s.tau_KH(), 0.5 * s.tau_KH());
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;
   return r;
@@ -279,18 +319,22 @@ SphKh<D, Kernel, Terms...> make_sph_kh(const KelvinHelmholtzParams& s, Terms... 
                                     kh_time_steps(s), physics::GradH<D>{s.h_over_dx}, terms...);
 }
 
-/// Runs one of the variants: RSPH (with either remap) or SPH, with conductivity when alpha_u > 0; with
-/// checkpoints, as they say.
+/// Runs one of the variants: RSPH (with either remap) or SPH, with conductivity when alpha_u > 0, on the ranks
+/// of mpiexec where built with MPI (examples::with_ranks); with checkpoints, as they say.
 template <int D = 2, class Kernel = kernel::CubicSpline, class OnStep, class OnEnd>
 KhRun run_kelvin_helmholtz(bool rsph, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&& on_end,
                            examples::Checkpoints* checkpoints = nullptr) {
   auto run = [&](auto sim) { return run_kh(sim, s, on_step, on_end, checkpoints); };
   const physics::ArtificialConductivity conduct{s.alpha_u};
-  if (rsph)
-    return examples::with_remap(s.remap, [&](auto order) {
-      return s.alpha_u > 0 ? run(make_rsph_kh<D, Kernel>(s, order, conduct)) : run(make_rsph_kh<D, Kernel>(s, order));
-    });
-  return s.alpha_u > 0 ? run(make_sph_kh<D, Kernel>(s, conduct)) : run(make_sph_kh<D, Kernel>(s));
+  return examples::with_ranks<D>([&](auto... domain) {
+    if (rsph)
+      return examples::with_remap(s.remap, [&](auto order) {
+        return s.alpha_u > 0 ? run(make_rsph_kh<D, Kernel>(s, order, conduct, domain...))
+                             : run(make_rsph_kh<D, Kernel>(s, order, domain...));
+      });
+    return s.alpha_u > 0 ? run(make_sph_kh<D, Kernel>(s, conduct, domain...))
+                         : run(make_sph_kh<D, Kernel>(s, domain...));
+  });
 }
 
 }  // namespace rsph::scenes

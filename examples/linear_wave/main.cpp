@@ -12,7 +12,7 @@ using namespace rsph;
 namespace ex = rsph::examples;
 
 int main(int argc, char** argv) {
-  return ex::guarded_main("rsph-linear-wave", [&] {
+  return ex::program_main("rsph-linear-wave", argc, argv, [&] {
     scenes::LinearWaveParams s;
     ex::CommonOptions common;
     std::string kernel_name = "quintic";

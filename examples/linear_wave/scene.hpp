@@ -5,6 +5,7 @@
 #include "linear_wave/analysis.hpp"
 #include "rsph/rsph.hpp"
 
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -88,12 +89,23 @@ struct LinearWaveResult : examples::RunCost {
 };
 
 namespace detail {
+/// The rms of v_y over every rank's particles.
 template <class Sim>
 double transverse_noise(const Sim& sim) {
-  double s = 0.0;
+  std::array<double, 2> sums{};  // sum of v_y^2, count
   const auto& p = sim.particles();
-  for (std::size_t a = 0; a < p.n_real; ++a) s += p.v[a][1] * p.v[a][1];
-  return std::sqrt(s / static_cast<double>(p.n_real));
+  for (std::size_t a = 0; a < p.n_real; ++a) sums[0] += p.v[a][1] * p.v[a][1];
+  sums[1] = static_cast<double>(p.n_real);
+  examples::sum_over_ranks(sim, sums);
+  return std::sqrt(sums[0] / sums[1]);
+}
+
+/// The sensor's density, summed over every rank's particles.
+template <class Kernel, class Sim>
+double sensor_density_of(const Sim& sim, const Box<2>& box, const Vec<2>& at) {
+  std::array<double, 1> rho{sensor_density<Kernel>(sim.particles(), box, at)};
+  examples::sum_over_ranks(sim, rho);
+  return rho[0];
 }
 }  // namespace detail
 
@@ -101,10 +113,11 @@ double transverse_noise(const Sim& sim) {
 template <class Order = regularize::FirstOrder>
 using WaveRegularizer =
     regularize::LatticeRegularizer<lattice::Square, schedule::EveryT, geometry::LocalVoronoi, region::Unbounded, Order>;
-template <class Kernel, class Order = regularize::FirstOrder>
-using RsphWave = Simulation<2, Kernel, eos::Isothermal, WaveRegularizer<Order>>;
-template <class Kernel>
-using SphWave = Simulation<2, Kernel, eos::Isothermal, regularize::None, physics::ArtificialViscosity>;
+/// Extra: a domain decomposition for many ranks (examples::with_ranks), or nothing.
+template <class Kernel, class Order = regularize::FirstOrder, class... Extra>
+using RsphWave = Simulation<2, Kernel, eos::Isothermal, WaveRegularizer<Order>, Extra...>;
+template <class Kernel, class... Extra>
+using SphWave = Simulation<2, Kernel, eos::Isothermal, regularize::None, physics::ArtificialViscosity, Extra...>;
 
 inline TimeStepParams wave_time_steps(const LinearWaveParams& s) {
   TimeStepParams ts;
@@ -112,19 +125,20 @@ inline TimeStepParams wave_time_steps(const LinearWaveParams& s) {
   return ts;
 }
 
-template <class Kernel, class Order = regularize::FirstOrder>
-RsphWave<Kernel, Order> make_rsph_wave(const LinearWaveParams& s, Order order = {}) {
-  return RsphWave<Kernel, Order>(
+template <class Kernel, class Order = regularize::FirstOrder, class... Extra>
+RsphWave<Kernel, Order, Extra...> make_rsph_wave(const LinearWaveParams& s, Order order = {}, Extra... extra) {
+  return RsphWave<Kernel, Order, Extra...>(
       linear_wave_particles(s), s.box(), eos::Isothermal{s.cs},
       WaveRegularizer<Order>(lattice::Square{s.spacing()}, schedule::EveryT{s.r * s.period()},
                              {.remap = {s.h_over_dx}, .order = order}),
-      wave_time_steps(s));
+      wave_time_steps(s), std::move(extra)...);
 }
 
-template <class Kernel>
-SphWave<Kernel> make_sph_wave(const LinearWaveParams& s) {
-  return SphWave<Kernel>(linear_wave_particles(s), s.box(), eos::Isothermal{s.cs}, regularize::None{},
-                         wave_time_steps(s), physics::ArtificialViscosity{s.alpha, 2.0 * s.alpha});
+template <class Kernel, class... Extra>
+SphWave<Kernel, Extra...> make_sph_wave(const LinearWaveParams& s, Extra... extra) {
+  return SphWave<Kernel, Extra...>(linear_wave_particles(s), s.box(), eos::Isothermal{s.cs}, regularize::None{},
+                                   wave_time_steps(s), physics::ArtificialViscosity{s.alpha, 2.0 * s.alpha},
+                                   std::move(extra)...);
 }
 
 /// Runs a simulation of the scene for `periods` periods (examples::run_stops), sampling the sensor every
@@ -140,7 +154,7 @@ LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step,
   LinearWaveResult res;
   auto record = [&](const auto& sm) {
     res.t.push_back(sm.time());
-    res.delta_rho.push_back(sensor_density<Kernel>(sm.particles(), box, sensor) - rho_ref);
+    res.delta_rho.push_back(detail::sensor_density_of<Kernel>(sm, box, sensor) - rho_ref);
   };
   record(sim);
   bool early_noted = false;
@@ -175,17 +189,19 @@ LinearWaveResult run_wave(Sim& sim, const LinearWaveParams& s, OnStep&& on_step,
   return res;
 }
 
-/// Runs RSPH when r > 0, else plain SPH.
+/// Runs RSPH when r > 0, else plain SPH, on the ranks of mpiexec where built with MPI (examples::with_ranks).
 template <class Kernel, class OnStep, class AtStop = examples::NoHook>
 LinearWaveResult run_linear_wave(const LinearWaveParams& s, OnStep&& on_step, AtStop&& at_stop = {},
                                  examples::Checkpoints* checkpoints = nullptr) {
-  if (s.r > 0.0)
-    return examples::with_remap(s.remap, [&](auto order) {
-      auto sim = make_rsph_wave<Kernel>(s, order);
-      return run_wave<Kernel>(sim, s, on_step, at_stop, checkpoints);
-    });
-  auto sim = make_sph_wave<Kernel>(s);
-  return run_wave<Kernel>(sim, s, on_step, at_stop, checkpoints);
+  return examples::with_ranks<2>([&](auto... domain) {
+    if (s.r > 0.0)
+      return examples::with_remap(s.remap, [&](auto order) {
+        auto sim = make_rsph_wave<Kernel>(s, order, domain...);
+        return run_wave<Kernel>(sim, s, on_step, at_stop, checkpoints);
+      });
+    auto sim = make_sph_wave<Kernel>(s, domain...);
+    return run_wave<Kernel>(sim, s, on_step, at_stop, checkpoints);
+  });
 }
 
 }  // namespace rsph::scenes

@@ -231,19 +231,21 @@ int run(Options opt) {
     const bool last = d.orbit >= s.orbits * (1.0 - 1e-12);
     if constexpr (std::decay_t<decltype(sim)>::dim == 3) {
       // between the zones: the disk whose gas moves freely
-      const double thickness = scenes::thickness_ratio(sim.particles(), s.vertical(), s.zones().inner, s.zones().outer);
+      const double thickness =
+          scenes::thickness_ratio(ex::particles_everywhere(sim), s.vertical(), s.zones().inner, s.zones().outer);
       if (d.steps == 0) thickness_initial = thickness;
       thickness_final = thickness;
     }
     if (d.orbit >= next_snapshot * (1.0 - 1e-12) || last) {
       const Vec<2> star = s.star_planet().star_position(sim.time()),
                    planet = s.star_planet().planet_position(sim.time());
-      io::write_snapshot(dir / io::snapshot_name(snapshots++), sim,
+      ex::write_snapshot(dir / io::snapshot_name(snapshots++), sim,
                          "G = 1, M_* = 1, planet orbit radius a = 1 (an orbit takes 2 pi / sqrt(1 + M_p))",
                          {{"star", {star.x(), star.y()}}, {"planet", {planet.x(), planet.y()}}});
       next_snapshot += snapshot_every;
     }
-    if (last) wake = write_maps(dir, scenes::seen_from_above(sim.particles()), s, sim.time(), map_nr, map_nphi);
+    if (last)
+      wake = write_maps(dir, scenes::seen_from_above(ex::particles_everywhere(sim)), s, sim.time(), map_nr, map_nphi);
   };
   ex::Checkpoints checkpoints(common, dir, "rsph-planet-disk", period);
   const auto part = checkpoints.add("program", [&](io::Archive& ar) {

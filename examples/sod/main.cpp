@@ -51,7 +51,7 @@ int run(const Options& opt, Sim sim) {
   progress.finish();
   log.close();
 
-  const auto& p = sim.particles();
+  decltype(auto) p = ex::particles_everywhere(sim);  // the whole tube, on every rank
   io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});
   for (std::size_t a = 0; a < p.n_real; ++a)
     parts.row({p.x[a][0], D > 1 ? p.x[a][D - 1] : 0.0, p.rho[a], p.v[a][0], p.P[a], p.u[a]});
@@ -91,15 +91,22 @@ int run(const Options& opt, Sim sim) {
   return 0;
 }
 
+/// SPH in any dimension and RSPH in 3D run on the ranks of mpiexec where built with MPI (ex::with_ranks);
+/// RSPH's multi-level lattices in 1D and 2D run in one process.
 template <int D, class Kernel>
 int run_method(const Options& opt) {
-  if (opt.method == "sph") return run<D, Kernel>(opt, scenes::make_sod<D, Kernel>(opt.sod));
+  if (opt.method == "sph")
+    return ex::with_ranks<D>(
+        [&](auto... domain) { return run<D, Kernel>(opt, scenes::make_sod<D, Kernel>(opt.sod, domain...)); });
   if (opt.method == "rsph")
     return ex::with_remap(opt.rsph.remap, [&](auto order) {
       using Order = decltype(order);
       if constexpr (D == 3) {
-        return run<D, Kernel>(opt, scenes::make_rsph_sod3<Kernel, Order>(opt.sod, opt.rsph));
+        return ex::with_ranks<D>([&](auto... domain) {
+          return run<D, Kernel>(opt, scenes::make_rsph_sod3<Kernel, Order>(opt.sod, opt.rsph, domain...));
+        });
       } else {
+        ex::in_one_process("rsph-sod --method rsph in 1D and 2D (a multi-level lattice)");
         if (opt.consistent_gradient)
           return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, opt.gradient));
         return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph));
@@ -116,7 +123,7 @@ int run_kernel(const Options& opt) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  return ex::guarded_main("rsph-sod", [&] {
+  return ex::program_main("rsph-sod", argc, argv, [&] {
     Options opt;
     ex::po::options_description desc("rsph-sod options");
     ex::Flags flag(desc, opt.common);

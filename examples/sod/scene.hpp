@@ -31,9 +31,10 @@ struct SodParams {
   }
 };
 
-template <int D, class Kernel>
+/// Extra: a domain decomposition for many ranks (examples::with_ranks), or nothing.
+template <int D, class Kernel, class... Extra>
 using SodSimulation =
-    Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<D>>;
+    Simulation<D, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<D>, Extra...>;
 
 /// The walls at x = 0 and 1; in 2D and 3D the cross-section periodic, `width` wide.
 template <int D>
@@ -62,8 +63,8 @@ void add_sod_block(ParticleSet<D, true>& p, const analysis::GasState& state, con
 /// Equal-mass particles in 1D (spacing ratio 8 across the membrane); in 2D and 3D a lattice of spacing dx on
 /// the left and 2 dx on the right so both tile the periodic cross-section (masses differ by the density ratio
 /// over 2^D: in 3D they are equal).
-template <int D, class Kernel>
-SodSimulation<D, Kernel> make_sod(const SodParams& s) {
+template <int D, class Kernel, class... Extra>
+SodSimulation<D, Kernel, Extra...> make_sod(const SodParams& s, Extra... extra) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   gas.validate();
@@ -79,8 +80,9 @@ SodSimulation<D, Kernel> make_sod(const SodParams& s) {
   add_sod_block(p, s.right, gas, 0.5, n_right, ny_right, dx_right, s.h_over_dx, bias);
   TimeStepParams ts;
   ts.courant = s.courant;
-  return SodSimulation<D, Kernel>(std::move(p), sod_box<D>(ny_left * dx_left), gas, regularize::None{}, ts,
-                                  physics::ArtificialViscosity{s.alpha, s.beta}, physics::GradH<D>{s.h_over_dx});
+  return SodSimulation<D, Kernel, Extra...>(std::move(p), sod_box<D>(ny_left * dx_left), gas, regularize::None{}, ts,
+                                            physics::ArtificialViscosity{s.alpha, s.beta},
+                                            physics::GradH<D>{s.h_over_dx}, std::move(extra)...);
 }
 
 /// RSPH on a lattice of levels 0..levels (levels = 0: uniform) with the density-jump criterion: the
@@ -164,12 +166,12 @@ template <class Order = regularize::FirstOrder>
 using RsphSod3Regularizer =
     regularize::LatticeRegularizer<lattice::Cubic, schedule::EveryNSteps,
                                    typename geometry::DefaultCellBuilder<3>::type, region::Unbounded, Order>;
-template <class Kernel, class Order>
+template <class Kernel, class Order, class... Extra>
 using RsphSod3Simulation =
-    Simulation<3, Kernel, eos::IdealGas, RsphSod3Regularizer<Order>, physics::ArtificialViscosity>;
+    Simulation<3, Kernel, eos::IdealGas, RsphSod3Regularizer<Order>, physics::ArtificialViscosity, Extra...>;
 
-template <class Kernel, class Order = regularize::FirstOrder>
-RsphSod3Simulation<Kernel, Order> make_rsph_sod3(const SodParams& s, const RsphSodParams& r) {
+template <class Kernel, class Order = regularize::FirstOrder, class... Extra>
+RsphSod3Simulation<Kernel, Order, Extra...> make_rsph_sod3(const SodParams& s, const RsphSodParams& r, Extra... extra) {
   s.validate();
   r.validate();
   const eos::IdealGas gas{s.gamma};
@@ -182,11 +184,11 @@ RsphSod3Simulation<Kernel, Order> make_rsph_sod3(const SodParams& s, const RsphS
   TimeStepParams ts;
   ts.courant = s.courant;
   ts.max_bin = r.max_bin;
-  return RsphSod3Simulation<Kernel, Order>(
+  return RsphSod3Simulation<Kernel, Order, Extra...>(
       std::move(p), sod_box<3>(s.ny_left * dx), gas,
       RsphSod3Regularizer<Order>(lattice::Cubic{dx}, schedule::EveryNSteps{r.cycle},
                                  {.remap = regularize::RemapParams{s.h_over_dx}}),
-      ts, physics::ArtificialViscosity{s.alpha, s.beta});
+      ts, physics::ArtificialViscosity{s.alpha, s.beta}, std::move(extra)...);
 }
 
 }  // namespace rsph::scenes

@@ -97,7 +97,7 @@ double shock_position(const P& p, double threshold, double bin) {
 template <class Sim>
 void measure(const Sim& sim, const StrongShockParams& s, ShockRun& r) {
   const analysis::ExactRiemann exact(s.left, s.right, s.gamma);
-  const auto& p = sim.particles();
+  decltype(auto) p = examples::particles_everywhere(sim);  // the whole tube, on every rank
   for (std::size_t a = 0; a < p.n_real; ++a) {
     r.x.push_back(p.x[a][0]);
     r.y.push_back(p.x[a][1]);
@@ -133,14 +133,16 @@ void measure(const Sim& sim, const StrongShockParams& s, ShockRun& r) {
 template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
 using ShockRegularizer = regularize::LatticeRegularizer<lattice::Square, schedule::Adaptive<Kernel, 2>,
                                                         geometry::LocalVoronoi, region::Unbounded, Order>;
-template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
-using RsphShock = Simulation<2, Kernel, eos::IdealGas, ShockRegularizer<Order, Kernel>, physics::ArtificialViscosity>;
-template <class Kernel = kernel::CubicSpline>
+/// Extra: a domain decomposition for many ranks (examples::with_ranks), or nothing.
+template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline, class... Extra>
+using RsphShock =
+    Simulation<2, Kernel, eos::IdealGas, ShockRegularizer<Order, Kernel>, physics::ArtificialViscosity, Extra...>;
+template <class Kernel = kernel::CubicSpline, class... Extra>
 using SphShock =
-    Simulation<2, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<2>>;
+    Simulation<2, Kernel, eos::IdealGas, regularize::None, physics::ArtificialViscosity, physics::GradH<2>, Extra...>;
 
-template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
-RsphShock<Order, Kernel> make_rsph_shock(const StrongShockParams& s, Order order = {}) {
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder, class... Extra>
+RsphShock<Order, Kernel, Extra...> make_rsph_shock(const StrongShockParams& s, Order order = {}, Extra... extra) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   const double dx = 1.0 / s.nx;
@@ -153,12 +155,12 @@ RsphShock<Order, Kernel> make_rsph_shock(const StrongShockParams& s, Order order
   box.edge = {Edge::reflecting, Edge::periodic};
   TimeStepParams ts;
   ts.courant = s.courant;
-  return RsphShock<Order, Kernel>(
+  return RsphShock<Order, Kernel, Extra...>(
       std::move(p), box, gas,
       ShockRegularizer<Order, Kernel>(lattice::Square{dx},
                                       schedule::Adaptive<Kernel, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
                                       {.remap = {s.h_over_dx}, .order = order}),
-      ts, physics::ArtificialViscosity{s.alpha, s.beta});
+      ts, physics::ArtificialViscosity{s.alpha, s.beta}, std::move(extra)...);
 }
 
 /// RSPH on levels in factors of two (the paper's variable, time-dependent resolution), the density-jump
@@ -197,8 +199,8 @@ RsphLevelShock<Order, Kernel> make_rsph_levels_shock(const StrongShockParams& s,
       ts, physics::ArtificialViscosity{s.alpha, s.beta}, physics::ConsistentGradient{});
 }
 
-template <class Kernel = kernel::CubicSpline>
-SphShock<Kernel> make_sph_shock(const StrongShockParams& s) {
+template <class Kernel = kernel::CubicSpline, class... Extra>
+SphShock<Kernel, Extra...> make_sph_shock(const StrongShockParams& s, Extra... extra) {
   s.validate();
   const eos::IdealGas gas{s.gamma};
   ParticleSet<2, true> p;
@@ -210,8 +212,9 @@ SphShock<Kernel> make_sph_shock(const StrongShockParams& s) {
   box.edge = {Edge::reflecting, Edge::periodic};
   TimeStepParams ts;
   ts.courant = s.courant;
-  return SphShock<Kernel>(std::move(p), box, gas, regularize::None{}, ts, physics::ArtificialViscosity{s.alpha, s.beta},
-                          physics::GradH<2>{s.eta});
+  return SphShock<Kernel, Extra...>(std::move(p), box, gas, regularize::None{}, ts,
+                                    physics::ArtificialViscosity{s.alpha, s.beta}, physics::GradH<2>{s.eta},
+                                    std::move(extra)...);
 }
 
 /// Runs any of the simulations to t_end (examples::run_stops); on_step(sim) after each step, on_end(sim) once

@@ -83,7 +83,7 @@ int run(Options opt) {
       conservation.record(sim.time(), sim.steps(), sim.totals());
   };
   auto on_snapshot = [&](const auto& sim, int k) {
-    io::write_snapshot(dir / io::snapshot_name(k + 1), sim, "G M_* = 1, ring radius R_0 = 1", {{"star", {0.0, 0.0}}});
+    ex::write_snapshot(dir / io::snapshot_name(k + 1), sim, "G M_* = 1, ring radius R_0 = 1", {{"star", {0.0, 0.0}}});
     if (k < 0) conservation.record(sim.time(), sim.steps(), sim.totals());
   };
   ex::Checkpoints checkpoints(common, dir, "rsph-viscous-ring");

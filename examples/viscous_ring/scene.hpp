@@ -214,10 +214,10 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
     if (k >= 0) {
       const double mass = sm.totals().mass;
       r.max_mass_error = std::max(r.max_mass_error, std::abs(mass + r.mass_accreted - r.mass_initial) / r.mass_initial);
-      auto snap =
-          measure_ring(s, s.taus[static_cast<std::size_t>(k)], sm.time(), ring_profile(sm.particles(), s.bin_width));
+      auto snap = measure_ring(s, s.taus[static_cast<std::size_t>(k)], sm.time(),
+                               ring_profile(examples::particles_everywhere(sm), s.bin_width));
       snap.mass = mass;
-      snap.particles = sm.particles().n_real;
+      snap.particles = examples::count_over_ranks(sm, sm.particles().n_real);
       r.snapshots.push_back(std::move(snap));
     }
     on_snapshot(sm, k);
@@ -247,11 +247,13 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
 template <class Lattice, class Order = regularize::FirstOrder>
 using RingRegularizer =
     regularize::LatticeRegularizer<Lattice, schedule::EveryNSteps, geometry::LocalVoronoi, region::Unbounded, Order>;
-template <class Lattice, class Viscosity, class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
-using RsphRing =
-    Simulation<2, Kernel, eos::Pressureless, RingRegularizer<Lattice, Order>, Viscosity, physics::PointMass<2>>;
-template <class Viscosity, class Kernel = kernel::CubicSpline>
-using SphRing = Simulation<2, Kernel, eos::Pressureless, regularize::None, Viscosity, physics::PointMass<2>>;
+/// Extra: a domain decomposition for many ranks (examples::with_ranks), or nothing.
+template <class Lattice, class Viscosity, class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline,
+          class... Extra>
+using RsphRing = Simulation<2, Kernel, eos::Pressureless, RingRegularizer<Lattice, Order>, Viscosity,
+                            physics::PointMass<2>, Extra...>;
+template <class Viscosity, class Kernel = kernel::CubicSpline, class... Extra>
+using SphRing = Simulation<2, Kernel, eos::Pressureless, regularize::None, Viscosity, physics::PointMass<2>, Extra...>;
 
 /// The time-step parameters; individual steps only with the MG viscosity (a stress term needs one step).
 template <class Viscosity>
@@ -275,27 +277,28 @@ Viscosity ring_viscosity(const ViscousRingParams& s) {
     return Viscosity::on_square_lattice(s.nu, s.h_over_dx);
 }
 
-template <class Viscosity, class Kernel = kernel::CubicSpline, class Lattice, class Order = regularize::FirstOrder>
-RsphRing<Lattice, Viscosity, Order, Kernel> make_rsph_ring(const ViscousRingParams& s, const Lattice& lat,
-                                                           Order order = {}) {
+template <class Viscosity, class Kernel = kernel::CubicSpline, class Lattice, class Order = regularize::FirstOrder,
+          class... Extra>
+RsphRing<Lattice, Viscosity, Order, Kernel, Extra...> make_rsph_ring(const ViscousRingParams& s, const Lattice& lat,
+                                                                     Order order = {}, Extra... extra) {
   // Open edges: an edge cell closed at 0.75 Delta has about one lattice cell's area, and a new cell
   // less than half covered hands its share to its neighbour, so the edge follows the gas rather
   // than creeping outwards by a closing radius at every regularization; cells with less than 1e-6 of
   // the largest mass join their neighbours, so the far tails (Sigma ~ 1e-6 of its peak) cost nothing.
   const regularize::RemapParams remap{s.h_over_dx, 0.5, 0.75 / s.h_over_dx, 1e-6};
-  return RsphRing<Lattice, Viscosity, Order, Kernel>(
+  return RsphRing<Lattice, Viscosity, Order, Kernel, Extra...>(
       ring_particles_on<Kernel>(s, lat), s.box(), {},
       RingRegularizer<Lattice, Order>(lat, schedule::EveryNSteps{std::uint64_t(s.cycle) * s.cycle_unit},
                                       {.remap = remap, .order = order}),
       ring_time_steps<Viscosity>(s), ring_viscosity<Viscosity, Lattice>(s),
-      physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
+      physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0}, std::move(extra)...);
 }
 
-template <class Viscosity, class Kernel = kernel::CubicSpline, class Lattice>
-SphRing<Viscosity, Kernel> make_sph_ring(const ViscousRingParams& s, const Lattice& lat) {
-  return SphRing<Viscosity, Kernel>(ring_particles_on<Kernel>(s, lat), s.box(), {}, {}, ring_time_steps<Viscosity>(s),
-                                    ring_viscosity<Viscosity, Lattice>(s),
-                                    physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0});
+template <class Viscosity, class Kernel = kernel::CubicSpline, class Lattice, class... Extra>
+SphRing<Viscosity, Kernel, Extra...> make_sph_ring(const ViscousRingParams& s, const Lattice& lat, Extra... extra) {
+  return SphRing<Viscosity, Kernel, Extra...>(ring_particles_on<Kernel>(s, lat), s.box(), {}, {},
+                                              ring_time_steps<Viscosity>(s), ring_viscosity<Viscosity, Lattice>(s),
+                                              physics::PointMass<2>{1.0, Vec<2>::Zero(), 0.0}, std::move(extra)...);
 }
 
 namespace detail {
@@ -305,12 +308,23 @@ RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnSt
   using MG = physics::ShearViscosityMG<Kernel, 2>;
   using NS = physics::NavierStokesViscosity<2>;
   auto run = [&](auto sim) { return run_ring(sim, s, on_step, on_snapshot, checkpoints); };
-  if (s.cycle == 0)
-    return s.viscosity == "ns" ? run(make_sph_ring<NS, Kernel>(s, lat)) : run(make_sph_ring<MG, Kernel>(s, lat));
-  return examples::with_remap(s.remap, [&](auto order) {
-    return s.viscosity == "ns" ? run(make_rsph_ring<NS, Kernel>(s, lat, order))
-                               : run(make_rsph_ring<MG, Kernel>(s, lat, order));
-  });
+  // on the ranks of mpiexec where built with MPI, but on the rings lattice, whose sites follow the whole ring
+  auto on = [&](auto... domain) {
+    if (s.viscosity == "ns") {
+      if (s.cycle == 0) return run(make_sph_ring<NS, Kernel>(s, lat, domain...));
+      return examples::with_remap(
+          s.remap, [&](auto order) { return run(make_rsph_ring<NS, Kernel>(s, lat, order, domain...)); });
+    }
+    if (s.cycle == 0) return run(make_sph_ring<MG, Kernel>(s, lat, domain...));
+    return examples::with_remap(s.remap,
+                                [&](auto order) { return run(make_rsph_ring<MG, Kernel>(s, lat, order, domain...)); });
+  };
+  if constexpr (PerSiteLattice<Lattice>) {
+    examples::in_one_process("rsph-viscous-ring --lattice rings");
+    return on();
+  } else {
+    return examples::with_ranks<2>(on);
+  }
 }
 }  // namespace detail
 
