@@ -103,7 +103,7 @@ void run_case(scenes::DriftingPulseParams s, const std::vector<int>& counts, con
             for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
             csv.close();
             snapshots.write(sm);
-            const auto [axes, w] = scenes::pulse_widths(sm, s);
+            const auto [axes, w] = scenes::pulse_widths(p, sm.time(), s);
             run.results.back().widths.push_back(w);
             std::vector<double> row{s.shift, static_cast<double>(count), w};
             if constexpr (D > 1) {

@@ -107,17 +107,22 @@ double pulse_width_mass(const Sim& sim, const DriftingPulseParams& s, int axis =
   return pulse_width_mass(examples::particles_everywhere(sim), sim.time(), s, axis);
 }
 
-/// The widths along every axis, and their root mean square (the 1D width in 1D).
-template <class Sim>
-std::pair<std::vector<double>, double> pulse_widths(const Sim& sim, const DriftingPulseParams& s) {
-  decltype(auto) p = examples::particles_everywhere(sim);
+/// The widths along every axis, and their root mean square (the 1D width in 1D), of a whole set at time t.
+template <class P>
+std::pair<std::vector<double>, double> pulse_widths(const P& p, double t, const DriftingPulseParams& s) {
   std::vector<double> w;
   double sum2 = 0.0;
-  for (int k = 0; k < Sim::dim; ++k) {
-    w.push_back(pulse_width_mass(p, sim.time(), s, k));
+  for (int k = 0; k < P::dim; ++k) {
+    w.push_back(pulse_width_mass(p, t, s, k));
     sum2 += w.back() * w.back();
   }
-  return {w, std::sqrt(sum2 / Sim::dim)};
+  return {w, std::sqrt(sum2 / P::dim)};
+}
+
+/// The same of a simulation, its particles on every rank gathered first.
+template <class Sim>
+std::pair<std::vector<double>, double> pulse_widths(const Sim& sim, const DriftingPulseParams& s) {
+  return pulse_widths(examples::particles_everywhere(sim), sim.time(), s);
 }
 
 }  // namespace rsph::scenes
