@@ -323,14 +323,12 @@ class Simulation {
     kinetic_removed_ += before.kinetic - after.kinetic;
   }
 
-  /// The viscous stress of every point; on many ranks the halos' from their owners, then their images'.
+  /// The viscous stress of every real particle; on many ranks the halos' from their owners; then the images'.
   void stress_pass() {
-    physics::loops::stress_over_rho2<LoopScheme>(p_, box_, nl_, stress_term(), S_over_rho2_);
+    physics::loops::stress_over_rho2<LoopScheme>(p_, nl_, stress_term(), S_over_rho2_);
     if constexpr (distributed)
-      if (on_many_ranks()) {
-        domain().refresh_halos(S_over_rho2_);
-        physics::loops::stress_images(p_, box_, S_over_rho2_);
-      }
+      if (on_many_ranks()) domain().refresh_halos(S_over_rho2_);
+    physics::loops::stress_images(p_, box_, S_over_rho2_);
   }
 
   /// After the pressure pass: the fields a later pass reads, on the halos of other ranks' particles, then on
@@ -535,9 +533,8 @@ class Simulation {
     require(params_.max_bin == 0 || (!grad_h && !has_stress),
             "individual time steps (max_bin > 0) need fixed smoothing lengths and no viscous stress term");
     require(params_.max_bin == 0 || !corrected, "consistent gradients need one global time step (max_bin = 0)");
-    if constexpr (distributed)
-      require(params_.max_bin == 0 || domain().ranks() == 1,
-              "individual time steps do not run on many ranks yet (take --max-bin 0 there)");
+    require(params_.max_bin == 0 || !on_many_ranks(),
+            "individual time steps do not run on many ranks yet (take --max-bin 0 there)");
     validate_policy(eos_);
     validate_policy(reg_);
     std::apply([&](const auto&... term) { (validate_policy(term), ...); }, terms_);

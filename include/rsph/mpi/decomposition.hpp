@@ -207,15 +207,15 @@ class Decomposition {
     return n_own;
   }
 
-  /// After add_remap_halo: the particles whose cells the remap builds (ascending), this rank's own n_own and
-  /// the others within `width` of their bounds (across periodic faces too). Cells farther out feed only sites
-  /// another rank keeps, and where the halo ends they are open.
+  /// After add_remap_halo, on many ranks: the particles whose cells the remap builds (ascending), this rank's own
+  /// n_own and the others within `width` of their bounds (across periodic faces too). Cells farther out feed only
+  /// sites another rank keeps, and where the halo ends they are open.
   template <bool E>
   std::vector<std::uint32_t> remap_cells(const ParticleSet<D, E>& p, const Box<D>& box, std::size_t n_own,
                                          double width) const {
     std::vector<std::uint32_t> only(n_own);
     for (std::size_t a = 0; a < n_own; ++a) only[a] = static_cast<std::uint32_t>(a);
-    if (ranks() == 1 || n_own == 0) return ranks() == 1 ? std::vector<std::uint32_t>{} : only;
+    if (n_own == 0) return only;  // nothing here, and so no halo either
     Vec<D> lo = p.x[0], hi = p.x[0];
     for (std::size_t a = 1; a < n_own; ++a) lo = lo.cwiseMin(p.x[a]), hi = hi.cwiseMax(p.x[a]);
     lo.array() -= width;

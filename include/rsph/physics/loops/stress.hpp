@@ -25,13 +25,10 @@ template <class S>
     return kernel::grad_W_inv_h<Kernel, D>(r_ab, r, kernel::inv_h_ab(h_a, inv_h_a, h_b));
 }
 
-template <class P, int D>
-void stress_images(const P& p, const Box<D>& box, std::vector<Mat<D>>& S_over_rho2);
-
-/// S / rho^2 of every point (real and ghosts) from `term`'s stress of the velocity gradient, over current
-/// neighbour lists and densities; a mirror ghost sees the stress reflected, S' = M S M.
+/// S / rho^2 of every real particle from `term`'s stress of the velocity gradient, over current neighbour lists
+/// and densities, sized for the ghosts too, which stress_images then fills.
 template <class S, class P, class Term>
-void stress_over_rho2(const P& p, const Box<S::dim>& box, const neighbors::NeighborList& nl, const Term& term,
+void stress_over_rho2(const P& p, const neighbors::NeighborList& nl, const Term& term,
                       std::vector<Mat<S::dim>>& S_over_rho2) {
   constexpr int D = S::dim;
   const std::size_t n = p.n_real;
@@ -53,11 +50,10 @@ void stress_over_rho2(const P& p, const Box<S::dim>& box, const neighbors::Neigh
     const double rho = p.rho[a];
     S_over_rho2[a] = term.stress(G, rho) / (rho * rho);
   }
-  stress_images(p, box, S_over_rho2);
 }
 
-/// The ghosts' S / rho^2 from their sources' (again after a decomposition refreshed its halos, the sources of
-/// images made of them): a mirror ghost sees the stress reflected, S' = M S M.
+/// The ghosts' S / rho^2 from their sources' (on many ranks after the halos' came from their owners, the
+/// sources of images made of them): a mirror ghost sees the stress reflected, S' = M S M.
 template <class P, int D>
 void stress_images(const P& p, const Box<D>& box, std::vector<Mat<D>>& S_over_rho2) {
   const std::size_t n = p.n_real;
