@@ -122,7 +122,7 @@ void run_case(scenes::DriftingPulseParams s, const std::vector<int>& counts, con
       run.updates += cost.updates;
       run.reg_seconds += cost.phases.regularization;
       fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", shift_tag(s.shift),
-                 counts.back(), scenes::pulse_widths(sim, s).second, result.mass_error);
+                 counts.back(), result.widths.back(), result.mass_error);
     });
   });
 }
