@@ -154,11 +154,15 @@ void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume
     for (std::size_t c = begin; c < end; ++c)
       keep[c] = S.cell[c].volume > params.min_fill * volume(c) && S.cell[c].m > 0.0 && S.cell[c].m >= min_mass;
   });
+  // Among kept neighbours covered alike (full ones, mostly) the first in the neighbours' geometric order takes
+  // the share: a later one must be fuller by more than round-off, so that the choice does not hang on the order
+  // in which the overlaps were summed (the same on every rank of a decomposed run).
+  constexpr double fuller = 1.0 + 1e-9;
   auto best_neighbour = [&](std::size_t c) {
     std::int64_t kept_best = -1, heavy_best = -1;
     double best_fill = 0.0, best_mass = S.cell[c].m;
     for_each_neighbour(c, [&](std::size_t g) {
-      if (keep[g] && S.cell[g].volume > best_fill) {
+      if (keep[g] && S.cell[g].volume > best_fill * fuller) {
         kept_best = static_cast<std::int64_t>(g);
         best_fill = S.cell[g].volume;
       }
