@@ -6,6 +6,10 @@ field's largest value, particles matched by identity (plain SPH) or by position 
 by rank). Exit status 0 when all agree, 1 otherwise.
 
   compare_ranks.py --ranks 1,2,4 --figures shock_radius,peak_density -- build/bin/rsph-sedov --preset quick --dim 2
+
+With --relay 4@0.03,2@0.06,1 the run is also made in stages: on 4 ranks until it passes t = 0.03, where it stops
+with a checkpoint (--stop-at), resumed from that checkpoint on 2 ranks until 0.06, and finished on 1; the finished
+relay is compared with the first --ranks run as above.
 """
 import argparse
 import json
@@ -29,6 +33,22 @@ def run(mpiexec, ranks, cmd, out):
     proc = subprocess.run(full, capture_output=True, text=True, env=env)
     if proc.returncode != 0:
         sys.exit(f"{' '.join(full)} failed ({proc.returncode}):\n{proc.stdout}\n{proc.stderr}")
+    with open(os.path.join(out, "summary.json")) as f:
+        return json.load(f)
+
+
+def relay(mpiexec, stages, cmd, out):
+    """The run made in stages, each "RANKS@TIME" but the last (RANKS) resumed from the one before."""
+    env = dict(os.environ, **ENV)
+    for k, stage in enumerate(stages):
+        ranks, _, stop = stage.partition("@")
+        start = cmd + ["--out", out, "--overwrite"] if k == 0 else [cmd[0], "--resume", out]
+        full = [mpiexec, "-n", ranks] + start + ["--no-plot", "--quiet", "--stop-at", stop or "0"]
+        proc = subprocess.run(full, capture_output=True, text=True, env=env)
+        expected = 0 if k == len(stages) - 1 else 5
+        if proc.returncode != expected or (expected == 5 and "--resume" not in proc.stderr):
+            sys.exit(f"{' '.join(full)} exited {proc.returncode}, not {expected}:\n{proc.stdout}\n{proc.stderr}")
+        print(f"relay: {ranks} ranks" + (f" until t = {stop}, checkpoint written" if stop else " to the end"))
     with open(os.path.join(out, "summary.json")) as f:
         return json.load(f)
 
@@ -90,6 +110,8 @@ def main():
     ap.add_argument("--field-tolerance", type=float, default=1e-10,
                     help="largest field difference relative to the field's scale (an unstable flow amplifies the "
                          "last bits of sums made in another order, and may need more)")
+    ap.add_argument("--relay", default="", help="also make the run in stages across rank counts, each resumed "
+                    "from the last one's checkpoint: R1@T1,R2@T2,...,Rn (see above)")
     ap.add_argument("cmd", nargs=argparse.REMAINDER)
     a = ap.parse_args()
     cmd = a.cmd[1:] if a.cmd and a.cmd[0] == "--" else a.cmd
@@ -103,6 +125,12 @@ def main():
         problems = []
         for n in counts[1:]:
             problems += compare(results[counts[0]], results[n], n, figures, a.by_id, a.field_tolerance)
+        if a.relay:
+            out = os.path.join(tmp, "relay")
+            stages = a.relay.split(",")
+            finished = (relay(a.mpiexec, stages, cmd, out), last_snapshot(out))
+            problems += compare(results[counts[0]], finished, "->".join(s.split("@")[0] for s in stages), figures,
+                                a.by_id, a.field_tolerance)
     for p in problems:
         print("differs:", p)
     sys.exit(1 if problems else 0)

@@ -2,16 +2,22 @@
 // A program's checkpoints: when one is written (every so much simulated time in the scene's unit, at
 // --max-wall, on SIGINT or SIGTERM), what it holds (the simulation, the run loop's place and cost, and each
 // part of the program's own state: counters, samples, curves written so far), and the resume that continues
-// from it bit for bit. DIR/checkpoint.h5 is replaced whole each time (io::Archive).
+// from it bit for bit. DIR/checkpoint.h5 is replaced whole each time (io::Archive). On many ranks every rank
+// writes its own particles into the one file, in turn, and decides with the others when to write and stop; a
+// resume on any rank count shares the file's particles out again (Simulation::checkpoint).
 #include "common/cli.hpp"
 #include "common/run_helpers.hpp"
 #include "rsph/io/checkpoint.hpp"
+#ifdef RSPH_WITH_MPI
+#include "rsph/mpi/file_turns.hpp"
+#endif
 
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -34,7 +40,7 @@ inline void on_stop_signal(int sig) {
 inline std::string resumable_parameters(const CommonOptions& common) {
   std::string text;
   for (const auto& [name, value] : common.parameters)
-    if (name != "threads" && name != "quiet" && name != "checkpoint-every" && name != "max-wall")
+    if (name != "threads" && name != "quiet" && name != "checkpoint-every" && name != "max-wall" && name != "stop-at")
       text += name + " = " + value + "\n";
   return text;
 }
@@ -48,15 +54,18 @@ auto add_part(Checkpoints* checkpoints, const std::string& name, Fields&& fields
 class Checkpoints {
  public:
   /// `unit`: simulated time per unit of --checkpoint-every (an orbit, or 1); `unit_name` names it in messages.
+  /// `dir`: the run's output folder (on ranks other than 0 their private one; the checkpoint is in the run's).
   Checkpoints(const CommonOptions& common, const std::filesystem::path& dir, std::string program, double unit = 1.0)
-      : file_(dir / "checkpoint.h5"),
+      : file_(run_folder(common, dir) / "checkpoint.h5"),
         program_(std::move(program)),
         parameters_(resumable_parameters(common)),
         every_(common.checkpoint_every * unit),
         max_wall_(common.max_wall * 60.0),
         max_wall_text_(default_text(common.max_wall)),
+        stop_at_(common.stop_at * unit),
+        stop_at_text_(default_text(common.stop_at)),
         resume_(!common.resume.empty()),
-        command_(program_ + " --resume " + dir.string()) {
+        command_(program_ + " --resume " + run_folder(common, dir).string()) {
     detail::stop_signal = 0;
     std::signal(SIGINT, detail::on_stop_signal);
     std::signal(SIGTERM, detail::on_stop_signal);
@@ -94,7 +103,7 @@ class Checkpoints {
   /// for.
   template <class Sim>
   std::size_t restore(Sim& sim, RunCost& cost) {
-    auto ar = io::Archive::load(file_);
+    auto ar = io::Archive::load(file_, io::Share{std::size_t(this_rank()), std::size_t(rank_count())});
     std::string program, parameters;
     ar("run/program", program);
     ar("run/parameters", parameters);
@@ -106,7 +115,8 @@ class Checkpoints {
     ar("run/stop", stop);
     state(ar, sim, cost);
     last_ = index_of(sim.time());
-    resume_ = false;  // later runs of the same program (the next case of a sweep) start afresh
+    seen_ = sim.time();  // a resume from --stop-at goes on past it
+    resume_ = false;     // later runs of the same program (the next case of a sweep) start afresh
     return stop;
   }
 
@@ -119,27 +129,42 @@ class Checkpoints {
     ar(key, value);
   }
 
-  /// After each step on the way to stop k: writes a checkpoint when --checkpoint-every says; on --max-wall
-  /// or a signal writes one and throws Stopped.
+  /// After each step on the way to stop k: writes a checkpoint when --checkpoint-every says; on --max-wall,
+  /// --stop-at or a signal writes one and throws Stopped.
   template <class Sim>
   void after_step(Sim& sim, std::size_t k, RunCost& cost) {
     const double index = index_of(sim.time());
-    const bool wall = max_wall_ > 0.0 && seconds_since(started_) >= max_wall_;  // this process's time
-    const int signal = detail::stop_signal;
-    if (index > last_ || wall || signal) {
+    bool wall = max_wall_ > 0.0 && seconds_since(started_) >= max_wall_;  // this process's time
+    int signal = detail::stop_signal;
+    if constexpr (Sim::distributed)  // every rank writes and stops when one of them would
+      if (rank_count() > 1) {
+        wall = sim.domain().any(wall);
+        signal = static_cast<int>(sim.domain().max(double(signal)));
+      }
+    const double mark = stop_at_ * (1.0 - 1e-12);  // --stop-at: this step passed it (the same on every rank)
+    const bool at = stop_at_ > 0.0 && seen_ < mark && sim.time() >= mark;
+    seen_ = sim.time();
+    if (index > last_ || wall || signal || at) {
       write(sim, k, cost);
       last_ = index;
     }
-    if (!wall && !signal) return;
+    if (!wall && !signal && !at) return;
     const std::string why = signal == SIGINT    ? "SIGINT"
                             : signal == SIGTERM ? "SIGTERM"
-                                                : "--max-wall " + max_wall_text_ + " minutes";
+                            : wall              ? "--max-wall " + max_wall_text_ + " minutes"
+                                                : "--stop-at " + stop_at_text_;
     throw Stopped("stopped by " + why + " at t = " + default_text(sim.time()) + " (step " +
                   std::to_string(sim.steps()) + "); checkpoint written to " + file_.string() + "; continue with `" +
                   command_ + "`");
   }
 
  private:
+  /// The run's output folder, on every rank.
+  static std::filesystem::path run_folder(const CommonOptions& common, const std::filesystem::path& dir) {
+    if (on_root()) return dir;
+    return common.resume.empty() ? std::filesystem::path(common.out) : std::filesystem::path(common.resume);
+  }
+
   double index_of(double time) const { return every_ > 0.0 ? std::floor(time / every_ * (1.0 + 1e-12)) : 0.0; }
 
   template <class Sim>
@@ -149,6 +174,10 @@ class Checkpoints {
     ar("run/parameters", parameters_);
     ar("run/stop", k);
     state(ar, sim, cost);
+#ifdef RSPH_WITH_MPI
+    if constexpr (Sim::distributed)
+      if (rank_count() > 1) return ar.write(file_, mpi::FileTurns(sim.domain().comm()));
+#endif
     ar.write(file_);
   }
 
@@ -178,6 +207,9 @@ class Checkpoints {
   std::string program_, parameters_;
   double every_, max_wall_;
   std::string max_wall_text_;
+  double stop_at_;
+  std::string stop_at_text_;
+  double seen_ = -std::numeric_limits<double>::infinity();  ///< the simulated time after the last step
   bool resume_;
   std::string command_;
   std::chrono::steady_clock::time_point started_ = std::chrono::steady_clock::now();

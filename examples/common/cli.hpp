@@ -62,6 +62,7 @@ struct CommonOptions {
   bool no_plot = false;           ///< no figure at the end of the run (common/figure.hpp)
   double checkpoint_every = 0.0;  ///< in the scene's unit; 0: checkpoints only at --max-wall and on signals
   double max_wall = 0.0;          ///< minutes; 0: no limit
+  double stop_at = 0.0;           ///< in the scene's unit; 0: run to the end
   std::string resume;             ///< a run's folder to continue from its checkpoint
   std::string config;             ///< a params.cfg (Boost.Program_options' config-file syntax) read under the flags
   std::string command_line;       ///< as given, for summary.json
@@ -122,6 +123,9 @@ inline void add_common_options(Flags& flag, CommonOptions& common, const std::st
       "write DIR/checkpoint.h5 every so much " + unit + " (0: only at --max-wall and on SIGINT or SIGTERM)";
   flag("checkpoint-every", common.checkpoint_every, every.c_str());
   flag("max-wall", common.max_wall, "stop with a checkpoint after this many wall-clock minutes (0: no limit)");
+  const std::string stop_at = "stop with a checkpoint once the run passes this many " + unit +
+                              " (0: run to the end); resume it on any number of ranks";
+  flag("stop-at", common.stop_at, stop_at.c_str());
   desc.add_options()("resume", po::value(&common.resume),
                      "continue the run in folder DIR from its checkpoint, with its params.cfg (flags given win)");
 }
@@ -196,12 +200,10 @@ inline bool parse(int argc, char** argv, const po::options_description& desc, po
 
 /// Checks what the checkpoint flags were given.
 inline void check_checkpoint_flags(const CommonOptions& common) {
-  require(rank_count() == 1 || (common.checkpoint_every == 0.0 && common.max_wall == 0.0 && common.resume.empty()),
-          "checkpoints are written by one rank only, as yet: run without --checkpoint-every, --max-wall and "
-          "--resume on " +
-              std::to_string(rank_count()) + " ranks");
   require(common.checkpoint_every >= 0.0,
           "--checkpoint-every must be 0 or positive (got " + default_text(common.checkpoint_every) + ")");
+  require(common.stop_at >= 0.0,
+          "--stop-at must be 0 or a positive simulated time (got " + default_text(common.stop_at) + ")");
   require(common.max_wall >= 0.0,
           "--max-wall must be 0 or a positive number of minutes (got " + default_text(common.max_wall) + ")");
 }
@@ -322,7 +324,7 @@ inline OutputFolder prepare_output(const CommonOptions& common) {
   return {dir, made, false};
 }
 
-/// A run that stopped early with a checkpoint written (--max-wall, SIGINT, SIGTERM): exit code 5.
+/// A run that stopped early with a checkpoint written (--max-wall, --stop-at, SIGINT, SIGTERM): exit code 5.
 struct Stopped : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -365,8 +367,8 @@ inline int guarded_main(const char* program, const std::function<int()>& body) {
   } catch (const NumericalError& e) {
     fmt::print(stderr, "{}: the run failed: {}\n", program, e.what());
     return 3;
-  } catch (const Stopped& e) {
-    fmt::print(stderr, "{}: {}\n", program, e.what());
+  } catch (const Stopped& e) {  // on many ranks every rank stops at the same step: rank 0 says so
+    if (on_root()) fmt::print(stderr, "{}: {}\n", program, e.what());
     return 5;
   } catch (const std::exception& e) {
     fmt::print(stderr, "{}: error: {}\n", program, e.what());
@@ -376,14 +378,14 @@ inline int guarded_main(const char* program, const std::function<int()>& body) {
 
 /// A program's main: parse(argc, argv) gives the options, or none after --help; run(options) does the work.
 /// A program's body under MPI where built with it: rank 0 reports, and an error on any rank ends them all
-/// with its exit code (guarded_main).
+/// with its exit code (guarded_main); a stop at a checkpoint, which the ranks decide together, ends each alike.
 template <class Body>
 int program_main(const char* program, int& argc, char**& argv, Body&& body) {
   wait_passively();  // before MPI starts
   MpiSession mpi(argc, argv);
   if (!on_root() && !std::freopen("/dev/null", "w", stdout)) return 4;  // rank 0 reports
   const int code = guarded_main(program, body);
-  if (code != 0) mpi.abort_all(code);
+  if (code != 0 && code != 5) mpi.abort_all(code);  // 5: a stop with a checkpoint, which every rank makes
   return code;
 }
 

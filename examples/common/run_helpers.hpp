@@ -108,7 +108,7 @@ struct RunCost {
     const auto scope = ar.scope("cost");
     double seconds = elapsed();
     ar("wall_seconds", seconds);
-    ar("particle_steps", particle_steps_);
+    ar.total("particle_steps", particle_steps_);  // of this rank's particles
     if (!ar.saving()) {
       earlier_seconds_ = seconds;
       started_ = std::chrono::steady_clock::now();

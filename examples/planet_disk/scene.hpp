@@ -405,10 +405,9 @@ SphDisk3<Kernel, Extra...> make_sph_disk_3d(const PlanetDiskParams& s, Extra... 
 
 namespace detail {
 
-/// Plain SPH on the ranks of mpiexec where built with MPI (examples::with_ranks), RSPH in one process (below).
+/// Either method on the ranks of mpiexec where built with MPI (examples::with_ranks).
 template <class Kernel, class Run>
 auto with_method_3d(const PlanetDiskParams& s, Run&& run) {
-  if (s.rsph()) examples::in_one_process("rsph-planet-disk's RSPH (--method sph runs on many ranks)");
   return examples::with_ranks<3>([&](auto... domain) {
     if (s.rsph())
       return examples::with_remap(s.remap, [&](auto order) {
@@ -420,8 +419,7 @@ auto with_method_3d(const PlanetDiskParams& s, Run&& run) {
   });
 }
 
-/// Plain SPH on the ranks of mpiexec where built with MPI; RSPH in one process: its remap on 2 ranks, cells
-/// closed by the disk's edges, changed the mass by 5.5e-5 (docs/method/mpi.md), which the check stops.
+/// Either method on the ranks of mpiexec where built with MPI, but on the rings lattice (in one process).
 template <class Kernel, class Lattice, class EOS, class Run>
 auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& run) {
   auto on = [&](auto... domain) {
@@ -433,10 +431,12 @@ auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& r
     auto sim = make_sph_disk<Kernel>(s, lat, eos, domain...);
     return run(sim);
   };
-  if constexpr (!PerSiteLattice<Lattice>)  // the rings lattice is refused on many ranks at compile time
-    if (!s.rsph()) return examples::with_ranks<2>(on);
-  examples::in_one_process("rsph-planet-disk's RSPH (--method sph runs on many ranks)");
-  return on();
+  if constexpr (PerSiteLattice<Lattice>) {  // the rings lattice is refused on many ranks at compile time
+    examples::in_one_process("rsph-planet-disk's RSPH on the rings lattice");
+    return on();
+  } else {
+    return examples::with_ranks<2>(on);
+  }
 }
 
 /// with_method on the scene's lattice.

@@ -105,7 +105,7 @@ class Simulation {
     validate();
     if (p_.id.size() != p_.n_real) p_.renumber();  // a set written field by field (a remap at set-up)
     if constexpr (distributed) {                   // every rank built the same set: each keeps its share
-      domain().distribute(p_);
+      domain_to_change().distribute(p_);
       rebalance();
     }
     boundary::mark_zone_members<D>(terms_, p_);
@@ -206,16 +206,18 @@ class Simulation {
   /// recomputed from the final one), the signal speeds, d rho/dt, the clocks and counters, the regularizer's
   /// state and the consistent-gradient solve's warm start. Restored, the next step continues bit for bit as
   /// the saved run would have: it rebuilds ghosts, neighbours and every other pass from these.
+  /// On many ranks every rank adds its own particles (the archive writes them into one file, mpi::FileTurns);
+  /// restored on any rank count, each rank takes a share of the file's particles and the decomposition
+  /// partitions them afresh. The clocks and the regularizer's log are rank 0's.
   template <class Archive>
   void checkpoint(Archive& ar) {
-    if constexpr (distributed) require(domain().ranks() == 1, "checkpoints are written by one rank only, as yet");
     const auto scope = ar.scope("simulation");
     p_.checkpoint(ar);
-    ar("v_sig", v_sig_);
-    ar("drho_dt", drho_dt_);
+    ar.rows("v_sig", v_sig_);
+    ar.rows("drho_dt", drho_dt_);
     ar("time", time_);
     ar("step", step_);
-    ar("particle_updates", particle_updates_);
+    ar.total("particle_updates", particle_updates_);
     ar("regularizations", regularizations_);
     ar("kinetic_removed", kinetic_removed_);
     ar("steps_since_regularization", since_.steps);
@@ -228,6 +230,11 @@ class Simulation {
     if constexpr (requires { reg_.checkpoint(ar); }) reg_.checkpoint(ar);
     if constexpr (corrected) cg_.checkpoint(ar);
     if (!ar.saving() && params_.max_bin > 0) blocks_.evaluated_all(p_, time_);  // a block ends synchronised
+    if constexpr (distributed)
+      if (!ar.saving() && on_many_ranks()) {
+        domain_to_change().repartition();
+        rebalance(false);
+      }
   }
 
   /// Steps until t_end, calling on_step(*this) after each step.
@@ -273,18 +280,19 @@ class Simulation {
   const auto& correction() const {
     return std::get<first_of_kind<sizeof...(Terms)>({GradientCorrection<Terms>...})>(terms_);
   }
-  auto& domain() requires distributed {
+  auto& domain_to_change() requires distributed {
     return std::get<first_of_kind<sizeof...(Terms)>({DomainDecomposition<Terms, D>...})>(terms_);
   }
 
-  /// Moves particles between ranks when the decomposition says so, weighted by their neighbour counts, with
-  /// the per-particle state a step reads before its rates are evaluated again (signal speeds, d rho/dt).
-  void rebalance() requires distributed {
+  /// Moves particles between ranks when the decomposition says so, weighted by their neighbour counts (when
+  /// `measured`: the neighbour list is this set's), with the per-particle state a step reads before its rates
+  /// are evaluated again (signal speeds, d rho/dt).
+  void rebalance(bool measured = true) requires distributed {
     if (!on_many_ranks()) return;
-    auto& d = domain();
+    auto& d = domain_to_change();
     const std::size_t n = p_.n_real;
     work_.assign(n, 1.0);
-    if (nl_.offset.size() == n + 1)
+    if (measured && nl_.offset.size() == n + 1)
       for (std::size_t a = 0; a < n; ++a) work_[a] += static_cast<double>(nl_.count(a));
     v_sig_.resize(n);
     drho_dt_.resize(n);
@@ -303,7 +311,7 @@ class Simulation {
   /// reach, keeps the new particles whose site its own gas held, and checks that the mass over all ranks is
   /// what it was (a reach too short would lose or double some).
   void remap_on_ranks() requires distributed {
-    auto& d = domain();
+    auto& d = domain_to_change();
     const auto before = totals();
     double h_max = 0.0;
     for (std::size_t a = 0; a < p_.n_real; ++a) h_max = std::max(h_max, p_.h[a]);
@@ -335,7 +343,7 @@ class Simulation {
   /// the images made of them.
   void refresh_halos() requires distributed {
     if (!on_many_ranks()) return;
-    auto& d = domain();
+    auto& d = domain_to_change();
     d.refresh_halos(p_.rho);
     d.refresh_halos(p_.P);
     d.refresh_halos(p_.cs);
@@ -502,7 +510,7 @@ class Simulation {
       h_median_ = n > 0 ? h_scratch_[n / 2] : h_max;
     }
     if constexpr (distributed)
-      domain().make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
+      domain_to_change().make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
     else
       boundary::make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
     cells_.build(p_.x, 0.5 * Kernel::support * h_median_ * margin);

@@ -23,7 +23,7 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
 from rsph_plot import load  # noqa: E402
 
-WALL = ("seconds", "per_second", "command_line", "checkpoint-every", "max-wall")
+WALL = ("seconds", "per_second", "command_line", "checkpoint-every", "max-wall", "stop-at")
 
 
 def fail(message):

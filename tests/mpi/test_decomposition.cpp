@@ -1,9 +1,11 @@
 #include "rsph/mpi/decomposition.hpp"
+#include "rsph/mpi/file_turns.hpp"
 #include "sedov/scene.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <filesystem>
 #include <map>
 #include <random>
 
@@ -13,10 +15,10 @@ namespace {
 
 mpi::Comm world() { return mpi::Comm(MPI_COMM_WORLD); }
 
-/// Every rank's real particles, keyed by identity, gathered on every rank (small sets only).
+/// Every rank's real particles, keyed by identity, gathered on every rank of `c` (small sets only).
 template <int D, bool E>
-std::map<std::uint64_t, std::vector<double>> gather_by_id(const ParticleSet<D, E>& p) {
-  const auto c = world();
+std::map<std::uint64_t, std::vector<double>> gather_by_id(const ParticleSet<D, E>& p,
+                                                          const mpi::Comm& c = mpi::Comm(MPI_COMM_WORLD)) {
   std::vector<std::vector<double>> rows(static_cast<std::size_t>(c.size()));
   std::vector<double> mine;
   for (std::size_t a = 0; a < p.n_real; ++a) {
@@ -301,4 +303,109 @@ TEST_CASE(
 
 TEST_CASE("Decomposed RSPH, second order: the same remaps and particles as one process", "[mpi][sim][regularize]") {
   compare_rsph_sedov<regularize::SecondOrder>("second-order");
+}
+
+TEST_CASE("Checkpoint on many ranks: one file in the serial layout, of which any rank count takes a share",
+          "[mpi][checkpoint]") {
+  const auto c = world();
+  const auto P = static_cast<std::size_t>(c.size()), r = static_cast<std::size_t>(c.rank());
+  const auto file = std::filesystem::temp_directory_path() / ("rsph_mpi_archive_" + std::to_string(P) + ".h5");
+  std::vector<std::uint64_t> id;  // rank r holds r + 2 rows, numbered on from the ranks before it
+  std::vector<Vec<2>> x;
+  for (std::size_t k = 0; k < r + 2; ++k) {
+    id.push_back(r * (r - 1) / 2 + 2 * r + k);
+    x.push_back(Vec<2>(double(id.back()), -0.5 * double(id.back())));
+  }
+  double updates = double(r + 1), time = 0.25;
+  {
+    auto ar = io::Archive::for_saving();
+    ar.rows("id", id);
+    ar.rows("x", x);
+    ar.total("updates", updates);
+    ar("time", time);
+    ar.write(file, mpi::FileTurns(c));
+  }
+  const std::size_t n = P * (P + 1) / 2 + P;  // every rank's rows
+  for (const std::size_t parts : {std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(5)})
+    for (std::size_t part = 0; part < parts; ++part) {
+      auto ar = io::Archive::load(file, {part, parts});
+      std::vector<std::uint64_t> id_read;
+      std::vector<Vec<2>> x_read;
+      double updates_read = -1.0, time_read = -1.0;
+      ar.rows("id", id_read);
+      ar.rows("x", x_read);
+      ar.total("updates", updates_read);
+      ar("time", time_read);
+      INFO("part " << part << " of " << parts << ", written by " << P << " ranks");
+      REQUIRE(id_read.size() == n * (part + 1) / parts - n * part / parts);
+      REQUIRE(x_read.size() == id_read.size());
+      for (std::size_t k = 0; k < id_read.size(); ++k) {
+        CHECK(id_read[k] == n * part / parts + k);
+        CHECK(x_read[k] == Vec<2>(double(id_read[k]), -0.5 * double(id_read[k])));
+      }
+      CHECK(updates_read == (part == 0 ? double(P * (P + 1) / 2) : 0.0));
+      CHECK(time_read == 0.25);
+    }
+  c.barrier();
+  if (r == 0) std::filesystem::remove(file);
+}
+
+TEST_CASE(
+    "Checkpoint of a decomposed run: written on every rank and resumed in one process, written in one "
+    "process and resumed on every rank, each as the run left alone",
+    "[mpi][checkpoint][sim]") {
+  const auto c = world();
+  const auto file = std::filesystem::temp_directory_path() / ("rsph_mpi_resume_" + std::to_string(c.size()) + ".h5");
+  scenes::SedovParams s;
+  s.n = 40;
+  auto whole = sedov<SedovRanks<2>>(s, mpi::Decomposition<2>{});
+  const auto run = [](auto& sim, int steps) {
+    for (int i = 0; i < steps; ++i) sim.step();
+  };
+  run(whole, 30);
+  {
+    auto ar = io::Archive::for_saving();
+    whole.checkpoint(ar);
+    ar.write(file, mpi::FileTurns(whole.domain().comm()));
+  }
+  run(whole, 30);
+  const auto expect_same = [&](const auto& resumed, const mpi::Comm& resumed_on) {
+    CHECK(resumed.steps() == whole.steps());
+    CHECK(std::abs(resumed.time() / whole.time() - 1.0) < 1e-12);
+    CHECK(resumed_on.sum(resumed.particle_updates()) == c.sum(whole.particle_updates()));
+    const double diff =
+        largest_difference(gather_by_id(whole.particles()), gather_by_id(resumed.particles(), resumed_on));
+    INFO("largest relative difference of a field " << diff << ", " << c.size() << " ranks");
+    if (c.size() == 1)
+      CHECK(diff == 0.0);  // one rank is the serial run, bit for bit
+    else
+      CHECK(diff < 1e-10);
+  };
+  // every rank resumes the file alone, on a communicator of its own
+  const mpi::Comm self(MPI_COMM_SELF);
+  auto alone = sedov<SedovRanks<2>>(s, mpi::Decomposition<2>{MPI_COMM_SELF});
+  {
+    auto ar = io::Archive::load(file);
+    alone.checkpoint(ar);
+  }
+  run(alone, 30);
+  expect_same(alone, self);
+  c.barrier();
+  // rank 0's one-process run writes the file; every rank resumes it together
+  if (c.rank() == 0) {
+    auto ar = io::Archive::for_saving();
+    alone.checkpoint(ar);
+    ar.write(file);
+  }
+  c.barrier();
+  run(whole, 30);
+  auto resumed = sedov<SedovRanks<2>>(s, mpi::Decomposition<2>{});
+  {
+    auto ar = io::Archive::load(file, {std::size_t(c.rank()), std::size_t(c.size())});
+    resumed.checkpoint(ar);
+  }
+  run(resumed, 30);
+  expect_same(resumed, c);
+  c.barrier();
+  if (c.rank() == 0) std::filesystem::remove(file);
 }

@@ -69,8 +69,9 @@ struct ParticleSet {
   }
 
   /// Saves or restores (ar.saving()) the real particles through a checkpoint archive (io/checkpoint.hpp):
-  /// every field the next step reads, rates included. Ghosts are left out, for the next step rebuilds them,
-  /// and when saving they stay in place for whatever reads them before that step.
+  /// every field the next step reads, rates included, as per-particle rows (on many ranks each rank's, loaded as
+  /// a share of them). Ghosts are left out, for the next step rebuilds them, and when saving they stay in
+  /// place for whatever reads them before that step.
   template <class Archive>
   void checkpoint(Archive& ar) {
     const auto scope = ar.scope("particles");
@@ -80,20 +81,20 @@ struct ParticleSet {
       real.clear_ghosts();
     }
     ParticleSet& p = ar.saving() ? real : *this;
-    ar("m", p.m);
-    ar("rho", p.rho);
-    ar("h", p.h);
-    ar("P", p.P);
-    ar("cs", p.cs);
-    ar("x", p.x);
-    ar("v", p.v);
-    ar("dv_dt", p.dv_dt);
+    ar.rows("m", p.m);
+    ar.rows("rho", p.rho);
+    ar.rows("h", p.h);
+    ar.rows("P", p.P);
+    ar.rows("cs", p.cs);
+    ar.rows("x", p.x);
+    ar.rows("v", p.v);
+    ar.rows("dv_dt", p.dv_dt);
     if constexpr (HasEnergy) {
-      ar("u", p.u);
-      ar("du_dt", p.du_dt);
+      ar.rows("u", p.u);
+      ar.rows("du_dt", p.du_dt);
     }
-    ar("frozen", p.frozen);
-    ar("id", p.id);
+    ar.rows("frozen", p.frozen);
+    ar.rows("id", p.id);
     ar("next_id", p.next_id);
     if (ar.saving()) return;
     n_real = x.size();

@@ -4,6 +4,13 @@
 // saves and restores it (Simulation, the regularizer, the run loop, a scene's counters and curves). Every
 // number keeps its bits: doubles as IEEE doubles, integers as 64-bit integers. The file is written to a
 // temporary name and renamed, so a run killed while writing leaves the previous checkpoint whole.
+//
+// Written by many processes (the ranks of a decomposed run), a checkpoint is still one file in the same layout:
+// a per-particle field (`rows`) holds every process's rows in process order, a figure that adds up over the
+// processes (`total`) holds the sum, and any other field the first process's value (the others hold the same,
+// or a figure of their own that is reported from the first). Loaded by any number of processes, each gets a
+// contiguous share of every per-particle field and the first one the totals, so that a checkpoint written by 4
+// ranks resumes on 2 or on 1.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/io/atomic_file.hpp"
@@ -38,16 +45,37 @@ class QuietHdf5 {
 };
 }  // namespace detail
 
+/// Which share of a checkpoint one of several processes loads: part `part` of `parts`.
+struct Share {
+  std::size_t part = 0, parts = 1;
+};
+
+/// The processes that write one checkpoint together (mpi::FileTurns on the ranks of a communicator): where
+/// each one's rows begin, the sums of their totals, whether all succeeded, and their turns at the file.
+template <class T>
+concept WritingTurns = requires(const T& t, std::vector<std::uint64_t> counts, std::vector<double> reals,
+                                std::vector<std::int64_t> integers, void (*write_part)()) {
+  { t.part() } -> std::convertible_to<std::size_t>;
+  { t.first_rows(counts) } -> std::same_as<std::vector<std::uint64_t>>;  ///< sum of the counts of earlier parts
+  { t.total_rows(counts) } -> std::same_as<std::vector<std::uint64_t>>;
+  { t.sum(reals) } -> std::same_as<std::vector<double>>;
+  { t.sum(integers) } -> std::same_as<std::vector<std::int64_t>>;
+  { t.all(true) } -> std::same_as<bool>;
+  t.in_turn(write_part);  ///< each part after the first, one after another
+};
+
 /// Saves fields into memory and then to a file, or restores them from a file, with one interface.
 class Archive {
  public:
   /// An archive that collects fields; write() puts them in a file.
   static Archive for_saving() { return Archive(); }
-  /// An archive that restores fields from `path`; a missing file or field is an InputError naming it.
-  static Archive load(const std::filesystem::path& path) {
+  /// An archive that restores fields from `path`, of which this process takes `share` (a contiguous share of
+  /// every per-particle field; the totals go to part 0); a missing file or field is an InputError naming it.
+  static Archive load(const std::filesystem::path& path, Share share = {}) {
     Archive ar;
     ar.saving_ = false;
     ar.path_ = path;
+    ar.share_ = share;
     const detail::QuietHdf5 quiet;
     if (!std::filesystem::is_regular_file(path)) throw InputError("no checkpoint '" + path.string() + "'");
     ar.file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
@@ -58,6 +86,7 @@ class Archive {
       : saving_(o.saving_),
         path_(std::move(o.path_)),
         file_(o.file_),
+        share_(o.share_),
         prefix_(std::move(o.prefix_)),
         fields_(std::move(o.fields_)) {
     o.file_ = -1;
@@ -91,7 +120,7 @@ class Archive {
     const std::string key = prefix_ + name;
     if constexpr (std::is_same_v<T, double>) {
       std::vector<double> one{value};
-      doubles(key, one);
+      doubles(key, one, 1);
       value = one.at(0);
     } else if constexpr (std::is_integral_v<T>) {
       std::vector<std::int64_t> one{static_cast<std::int64_t>(value)};
@@ -100,7 +129,7 @@ class Archive {
     } else if constexpr (std::is_same_v<T, std::string>) {
       bytes(key, value);
     } else if constexpr (std::is_same_v<T, std::vector<double>>) {
-      doubles(key, value);
+      doubles(key, value, 1);
     } else if constexpr (std::is_integral_v<typename T::value_type>) {
       std::vector<std::int64_t> all(value.begin(), value.end());
       integers(key, all);
@@ -111,12 +140,37 @@ class Archive {
       std::vector<double> flat(value.size() * k);
       for (std::size_t a = 0; a < value.size(); ++a)
         for (std::size_t j = 0; j < k; ++j) flat[a * k + j] = value[a].data()[j];
-      doubles(key, flat);
+      doubles(key, flat, k);
       if (flat.size() % k != 0) throw InputError("checkpoint field '" + key + "' has the wrong shape");
       value.resize(flat.size() / k);
       for (std::size_t a = 0; a < value.size(); ++a)
         for (std::size_t j = 0; j < k; ++j) value[a].data()[j] = flat[a * k + j];
     }
+  }
+
+  /// Saves or restores a per-particle field: every process's rows, in process order; loaded, this process's
+  /// share of them. On one process the same as operator().
+  template <class T>
+  void rows(const std::string& name, std::vector<T>& value) {
+    const Spread before = spread_;
+    spread_ = Spread::rows;
+    (*this)(name, value);
+    spread_ = before;
+  }
+
+  /// Saves or restores a figure that adds up over the processes (a count of this process's updates): the
+  /// file holds the sum; loaded, part 0 gets it and the others zero. On one process the same as operator().
+  template <class T>
+  void total(const std::string& name, T& value) {
+    static_assert(std::is_arithmetic_v<T>, "a total is a single number");
+    if (!saving_ && share_.part > 0) {
+      value = T{};
+      return;
+    }
+    const Spread before = spread_;
+    spread_ = Spread::total;
+    (*this)(name, value);
+    spread_ = before;
   }
 
   /// Saves or restores a list, each element's fields (fields(ar, element)) under name/0/, name/1/, ...
@@ -134,68 +188,161 @@ class Archive {
 
   /// Writes the collected fields to `path`, atomically.
   void write(const std::filesystem::path& path) const {
-    const detail::QuietHdf5 quiet;
     const auto tmp = temporary_sibling(path);
-    const hid_t file = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
-    if (file < 0) throw std::runtime_error("cannot create the checkpoint " + tmp.string());
-    const hid_t groups = H5Pcreate(H5P_LINK_CREATE);
-    H5Pset_create_intermediate_group(groups, 1);
-    bool ok = true;
-    for (const auto& [key, f] : fields_) {
-      const bool real = f.kind == 'd', text = f.kind == 'b';
-      hsize_t n = real ? f.d.size() : text ? f.b.size() : f.i.size();
-      const hid_t file_type = real ? H5T_IEEE_F64LE : text ? H5T_STD_U8LE : H5T_STD_I64LE;
-      const hid_t mem_type = real ? H5T_NATIVE_DOUBLE : text ? H5T_NATIVE_UCHAR : H5T_NATIVE_INT64;
-      const void* data = real   ? static_cast<const void*>(f.d.data())
-                         : text ? static_cast<const void*>(f.b.data())
-                                : static_cast<const void*>(f.i.data());
-      const hid_t space = H5Screate_simple(1, &n, nullptr);
-      const hid_t set = H5Dcreate2(file, key.c_str(), file_type, space, groups, H5P_DEFAULT, H5P_DEFAULT);
-      ok = ok && set >= 0 && (n == 0 || H5Dwrite(set, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0);
-      if (set >= 0) H5Dclose(set);
-      H5Sclose(space);
-    }
-    H5Pclose(groups);
-    ok = H5Fclose(file) >= 0 && ok;
-    if (!ok) {
+    if (!create(tmp, {})) {
       std::filesystem::remove(tmp);
       throw std::runtime_error("writing the checkpoint " + tmp.string() + " failed");
     }
     commit_file(tmp, path);
   }
 
+  /// Writes the fields that several processes collected, each its own archive, to one file at `path`,
+  /// atomically: part 0 creates it with every field at its full length and writes its rows, the others then
+  /// write theirs in turn. Every process calls it; if one fails, all throw.
+  template <WritingTurns Turns>
+  void write(const std::filesystem::path& path, const Turns& turns) const {
+    std::vector<std::uint64_t> counts;
+    std::vector<double> reals;
+    std::vector<std::int64_t> integers;
+    for (const auto& [key, f] : fields_) {
+      if (f.spread == Spread::rows) counts.push_back(f.kind == 'd' ? f.d.size() : f.i.size());
+      if (f.spread == Spread::total && f.kind == 'd') reals.push_back(f.d.at(0));
+      if (f.spread == Spread::total && f.kind == 'i') integers.push_back(f.i.at(0));
+    }
+    const Layout layout{turns.first_rows(counts), turns.total_rows(counts), turns.sum(reals), turns.sum(integers)};
+    const auto tmp = temporary_sibling(path);
+    bool ok = turns.part() != 0 || create(tmp, layout);
+    if (turns.all(ok)) turns.in_turn([&] { ok = add_rows(tmp, layout); });
+    ok = turns.all(ok);
+    if (ok && turns.part() == 0) ok = committed(tmp, path);
+    if (!turns.all(ok)) {  // and no process goes on before the file is in place
+      if (turns.part() == 0) std::filesystem::remove(tmp);
+      throw std::runtime_error("writing the checkpoint " + tmp.string() + " on many processes failed");
+    }
+  }
+
  private:
+  /// How a field written by many processes comes together: the first one's, every one's rows, or the sum.
+  enum class Spread { first, rows, total };
   struct Field {
     char kind = 'd';
     std::vector<double> d;
     std::vector<std::int64_t> i;
     std::string b;
+    Spread spread = Spread::first;
+    std::size_t row_size = 1;  ///< numbers per row of a per-particle field
+  };
+  /// Where each process's rows go (per `rows` field, in key order) and the totals' sums (in key order).
+  struct Layout {
+    std::vector<std::uint64_t> first, total;
+    std::vector<double> reals;
+    std::vector<std::int64_t> integers;
   };
   Archive() = default;
 
-  void doubles(const std::string& key, std::vector<double>& v) {
+  void doubles(const std::string& key, std::vector<double>& v, std::size_t row_size) {
     if (saving_)
-      fields_[key] = Field{'d', v, {}, {}};
+      fields_[key] = Field{'d', v, {}, {}, spread_, row_size};
     else
-      read(key, H5T_NATIVE_DOUBLE, H5T_FLOAT, v);
+      read(key, H5T_NATIVE_DOUBLE, H5T_FLOAT, v, row_size);
   }
   void integers(const std::string& key, std::vector<std::int64_t>& v) {
     if (saving_)
-      fields_[key] = Field{'i', {}, v, {}};
+      fields_[key] = Field{'i', {}, v, {}, spread_, 1};
     else
-      read(key, H5T_NATIVE_INT64, H5T_INTEGER, v);
+      read(key, H5T_NATIVE_INT64, H5T_INTEGER, v, 1);
   }
   void bytes(const std::string& key, std::string& text) {
     if (saving_) {
-      fields_[key] = Field{'b', {}, {}, text};
+      fields_[key] = Field{'b', {}, {}, text, Spread::first, 1};
       return;
     }
     std::vector<unsigned char> raw;
-    read(key, H5T_NATIVE_UCHAR, H5T_INTEGER, raw);
+    read(key, H5T_NATIVE_UCHAR, H5T_INTEGER, raw, 1);
     text.assign(raw.begin(), raw.end());
   }
+
+  /// The types of a field in the file and in memory, and its numbers.
+  static hid_t file_type(const Field& f) {
+    return f.kind == 'd' ? H5T_IEEE_F64LE : f.kind == 'b' ? H5T_STD_U8LE : H5T_STD_I64LE;
+  }
+  static hid_t memory_type(const Field& f) {
+    return f.kind == 'd' ? H5T_NATIVE_DOUBLE : f.kind == 'b' ? H5T_NATIVE_UCHAR : H5T_NATIVE_INT64;
+  }
+  static const void* data(const Field& f) {
+    return f.kind == 'd'   ? static_cast<const void*>(f.d.data())
+           : f.kind == 'b' ? static_cast<const void*>(f.b.data())
+                           : static_cast<const void*>(f.i.data());
+  }
+  static hsize_t length(const Field& f) { return f.kind == 'd' ? f.d.size() : f.kind == 'b' ? f.b.size() : f.i.size(); }
+
+  /// Writes `n` numbers of f at `first` of dataset `set` (a hyperslab of it unless it is the whole).
+  static bool write_at(hid_t set, const Field& f, hsize_t first, hsize_t n, const void* values) {
+    if (n == 0) return true;
+    const hid_t whole = H5Dget_space(set), memory = H5Screate_simple(1, &n, nullptr);
+    bool ok = H5Sselect_hyperslab(whole, H5S_SELECT_SET, &first, nullptr, &n, nullptr) >= 0;
+    ok = ok && H5Dwrite(set, memory_type(f), memory, whole, H5P_DEFAULT, values) >= 0;
+    H5Sclose(memory);
+    H5Sclose(whole);
+    return ok;
+  }
+
+  /// Creates the file `tmp` with every field (one process: as collected; many: `layout`'s lengths and sums)
+  /// and writes this process's values into it.
+  bool create(const std::filesystem::path& tmp, const Layout& layout) const {
+    const detail::QuietHdf5 quiet;
+    const hid_t file = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (file < 0) return false;
+    const hid_t groups = H5Pcreate(H5P_LINK_CREATE);
+    H5Pset_create_intermediate_group(groups, 1);
+    const bool many = !layout.total.empty() || !layout.reals.empty() || !layout.integers.empty();
+    std::size_t row = 0, real = 0, integer = 0;
+    bool ok = true;
+    for (const auto& [key, f] : fields_) {
+      hsize_t n = length(f);
+      const void* values = data(f);
+      if (f.spread == Spread::rows && many) n = layout.total.at(row++);
+      if (f.spread == Spread::total && many)
+        values = f.kind == 'd' ? static_cast<const void*>(&layout.reals.at(real++))
+                               : static_cast<const void*>(&layout.integers.at(integer++));
+      const hid_t space = H5Screate_simple(1, &n, nullptr);
+      const hid_t set = H5Dcreate2(file, key.c_str(), file_type(f), space, groups, H5P_DEFAULT, H5P_DEFAULT);
+      ok = ok && set >= 0 && write_at(set, f, 0, f.spread == Spread::rows ? length(f) : n, values);
+      if (set >= 0) H5Dclose(set);
+      H5Sclose(space);
+    }
+    H5Pclose(groups);
+    return H5Fclose(file) >= 0 && ok;
+  }
+
+  /// commit_file, false where it failed.
+  static bool committed(const std::filesystem::path& tmp, const std::filesystem::path& path) {
+    try {
+      commit_file(tmp, path);
+      return true;
+    } catch (const std::runtime_error&) {
+      return false;
+    }
+  }
+
+  /// Writes this process's rows of every per-particle field into the file `tmp` that part 0 created.
+  bool add_rows(const std::filesystem::path& tmp, const Layout& layout) const {
+    const detail::QuietHdf5 quiet;
+    const hid_t file = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    if (file < 0) return false;
+    std::size_t row = 0;
+    bool ok = true;
+    for (const auto& [key, f] : fields_) {
+      if (f.spread != Spread::rows) continue;
+      const hid_t set = H5Dopen2(file, key.c_str(), H5P_DEFAULT);
+      ok = ok && set >= 0 && write_at(set, f, layout.first.at(row++), length(f), data(f));
+      if (set >= 0) H5Dclose(set);
+    }
+    return H5Fclose(file) >= 0 && ok;
+  }
+
   template <class T>
-  void read(const std::string& key, hid_t mem_type, H5T_class_t kind, std::vector<T>& v) const {
+  void read(const std::string& key, hid_t mem_type, H5T_class_t kind, std::vector<T>& v, std::size_t row_size) const {
     const std::string where = "checkpoint '" + path_.string() + "': ";
     const detail::QuietHdf5 quiet;
     bool present = true;  // each group on the path first: H5Lexists fails where a parent is missing
@@ -213,8 +360,17 @@ class Archive {
       H5Dclose(set);
       throw InputError(where + "field '" + key + "' has the wrong type");
     }
-    v.resize(static_cast<std::size_t>(n));
-    const bool ok = n == 0 || H5Dread(set, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0;
+    // this process's share of the rows of a per-particle field; all of any other field
+    const auto rows = static_cast<hsize_t>(n) / row_size;
+    const bool part = spread_ == Spread::rows && share_.parts > 1;
+    const hsize_t first = part ? rows * share_.part / share_.parts * row_size : 0;
+    hsize_t count = part ? (rows * (share_.part + 1) / share_.parts) * row_size - first : static_cast<hsize_t>(n);
+    v.resize(static_cast<std::size_t>(count));
+    const hid_t whole = H5Dget_space(set), memory = H5Screate_simple(1, &count, nullptr);
+    bool ok = count == 0 || (H5Sselect_hyperslab(whole, H5S_SELECT_SET, &first, nullptr, &count, nullptr) >= 0 &&
+                             H5Dread(set, mem_type, memory, whole, H5P_DEFAULT, v.data()) >= 0);
+    H5Sclose(memory);
+    H5Sclose(whole);
     H5Dclose(set);
     if (!ok) throw InputError(where + "cannot read field '" + key + "'");
   }
@@ -222,6 +378,8 @@ class Archive {
   bool saving_ = true;
   std::filesystem::path path_;
   hid_t file_ = -1;
+  Share share_;
+  Spread spread_ = Spread::first;  ///< of the fields being named now (rows() and total() set it)
   std::string prefix_;
   std::map<std::string, Field> fields_;
 };

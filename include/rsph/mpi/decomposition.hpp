@@ -148,6 +148,9 @@ class Decomposition {
     due_ = false;
   }
 
+  /// The next balance() partitions afresh (the particles came from elsewhere: a checkpoint).
+  void repartition() { due_ = true; }
+
   /// Sends every real particle a with dest[a] != this rank there, every field and identity with it, and the
   /// entries of the per-particle arrays `extra`; the staying ones keep their order, the arrivals follow in
   /// rank order.
