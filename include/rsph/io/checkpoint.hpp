@@ -205,7 +205,7 @@ class Archive {
     std::vector<double> reals;
     std::vector<std::int64_t> integers;
     for (const auto& [key, f] : fields_) {
-      if (f.spread == Spread::rows) counts.push_back(f.kind == 'd' ? f.d.size() : f.i.size());
+      if (f.spread == Spread::rows) counts.push_back(length(f));
       if (f.spread == Spread::total && f.kind == 'd') reals.push_back(f.d.at(0));
       if (f.spread == Spread::total && f.kind == 'i') integers.push_back(f.i.at(0));
     }
@@ -230,7 +230,6 @@ class Archive {
     std::vector<std::int64_t> i;
     std::string b;
     Spread spread = Spread::first;
-    std::size_t row_size = 1;  ///< numbers per row of a per-particle field
   };
   /// Where each process's rows go (per `rows` field, in key order) and the totals' sums (in key order).
   struct Layout {
@@ -242,19 +241,19 @@ class Archive {
 
   void doubles(const std::string& key, std::vector<double>& v, std::size_t row_size) {
     if (saving_)
-      fields_[key] = Field{'d', v, {}, {}, spread_, row_size};
+      fields_[key] = Field{'d', v, {}, {}, spread_};
     else
       read(key, H5T_NATIVE_DOUBLE, H5T_FLOAT, v, row_size);
   }
   void integers(const std::string& key, std::vector<std::int64_t>& v) {
     if (saving_)
-      fields_[key] = Field{'i', {}, v, {}, spread_, 1};
+      fields_[key] = Field{'i', {}, v, {}, spread_};
     else
       read(key, H5T_NATIVE_INT64, H5T_INTEGER, v, 1);
   }
   void bytes(const std::string& key, std::string& text) {
     if (saving_) {
-      fields_[key] = Field{'b', {}, {}, text, Spread::first, 1};
+      fields_[key] = Field{'b', {}, {}, text, Spread::first};
       return;
     }
     std::vector<unsigned char> raw;
