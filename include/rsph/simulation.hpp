@@ -402,9 +402,20 @@ class Simulation {
   /// One block of individual time steps of at most `limit` (integrate/block_steps.hpp): a particle is
   /// evaluated (neighbours, density, forces) only when its step ends; at the end of the block all are
   /// synchronised, evaluated afresh, and the regularizer may act. Returns the block's length.
+  /// On many ranks the particles migrate at the block's start, all being synchronised then, and every substep
+  /// refreshes the halos (drifted positions, predicted velocities and densities) before its active particles'
+  /// rates; the block's length and finest step are planned from the limits of all ranks' particles.
   double block_step(double limit) {
+    if constexpr (distributed)
+      if (on_many_ranks()) {
+        rebalance();
+        blocks_.evaluated_all(p_, time_);  // the arrivals' last evaluation is now too
+      }
     auto t0 = clock::now();
-    const auto plan = blocks_.plan(p_, v_sig_, params_, limit, time_);
+    const auto plan = blocks_.plan(p_, v_sig_, params_, limit, time_,
+                                   [this]([[maybe_unused]] double& lo, [[maybe_unused]] double& hi) {
+                                     if constexpr (distributed) lo = domain().min(lo), hi = domain().max(hi);
+                                   });
     times_.integrate += seconds_since(t0);
     for (std::uint64_t sub = 0; sub < plan.n_sub; ++sub) {
       t0 = clock::now();
@@ -541,8 +552,6 @@ class Simulation {
     require(params_.max_bin == 0 || (!grad_h && !has_stress),
             "individual time steps (max_bin > 0) need fixed smoothing lengths and no viscous stress term");
     require(params_.max_bin == 0 || !corrected, "consistent gradients need one global time step (max_bin = 0)");
-    require(params_.max_bin == 0 || !on_many_ranks(),
-            "individual time steps do not run on many ranks yet (take --max-bin 0 there)");
     validate_policy(eos_);
     validate_policy(reg_);
     std::apply([&](const auto&... term) { (validate_policy(term), ...); }, terms_);

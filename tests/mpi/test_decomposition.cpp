@@ -253,9 +253,10 @@ using RsphSedovRanks =
                physics::ArtificialViscosity, mpi::Decomposition<D>>;
 
 template <class Order>
-void compare_rsph_sedov(const char* order_name) {
+void compare_rsph_sedov(const char* order_name, int max_bin = 0) {
   scenes::SedovParams s;
   s.n = 40;
+  s.max_bin = max_bin;
   auto alone = scenes::make_rsph_sedov<2, kernel::CubicSpline>(s, Order{});
   auto p = scenes::detail::sedov_particles<2, kernel::CubicSpline>(
       s, kernel::lattice_sum<kernel::CubicSpline, 2>(s.h_over_dx));
@@ -266,15 +267,18 @@ void compare_rsph_sedov(const char* order_name) {
                                      lattice::Cartesian<2>{dx}, schedule, {.remap = {s.h_over_dx}, .order = Order{}}),
                                  scenes::sedov_time_steps(s), physics::ArtificialViscosity{s.alpha, s.beta},
                                  mpi::Decomposition<2>{});
+  std::uint64_t calls = 0;  // of step(): a block of individual steps is one
   while (alone.regularizations() < 3) {
     alone.step();
     ranks.step();
+    ++calls;
   }
-  for (int i = 0; i < 5; ++i) {  // and on past the last remap
+  for (int i = 0; i < 5; ++i, ++calls) {  // and on past the last remap
     alone.step();
     ranks.step();
   }
-  INFO(order_name << " remap on " << world().size() << " ranks");
+  INFO(order_name << " remap on " << world().size() << " ranks, max_bin " << max_bin);
+  if (max_bin > 0) CHECK(alone.steps() > 2 * calls);  // the blocks were split into substeps
   CHECK(ranks.regularizations() == alone.regularizations());
   CHECK(ranks.steps() == alone.steps());
   CHECK(world().sum(std::uint64_t(ranks.particles().n_real)) == alone.particles().n_real);
@@ -303,6 +307,13 @@ TEST_CASE(
 
 TEST_CASE("Decomposed RSPH, second order: the same remaps and particles as one process", "[mpi][sim][regularize]") {
   compare_rsph_sedov<regularize::SecondOrder>("second-order");
+}
+
+TEST_CASE(
+    "Decomposed RSPH with individual time steps (max_bin 3): the same blocks, substeps, remaps and particles as "
+    "one process",
+    "[mpi][sim][regularize]") {
+  compare_rsph_sedov<regularize::FirstOrder>("first-order", 3);
 }
 
 TEST_CASE("Checkpoint on many ranks: one file in the serial layout, of which any rank count takes a share",

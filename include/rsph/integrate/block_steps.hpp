@@ -28,8 +28,11 @@ class BlockSteps {
   };
 
   /// The block, at most `limit` long, and each particle's bin. `time` names the moment in errors.
+  /// `over_all(lo, hi)` turns the shortest and longest finite limits of these particles into those of all that
+  /// step together (on many ranks a minimum and a maximum over the ranks), so every rank plans the same block.
+  template <class OverAll>
   Plan plan(const ParticleSet<D, E>& p, const std::vector<double>& v_sig, const TimeStepParams& params, double limit,
-            double time) {
+            double time, OverAll&& over_all) {
     const std::size_t n = p.n_real;
     double dt_lo = std::numeric_limits<double>::infinity(), dt_hi = 0.0;
     dt_own_.assign(n, std::numeric_limits<double>::infinity());
@@ -40,6 +43,7 @@ class BlockSteps {
       dt_lo = std::min(dt_lo, dt_own_[a]);
       if (std::isfinite(dt_own_[a])) dt_hi = std::max(dt_hi, dt_own_[a]);
     }
+    over_all(dt_lo, dt_hi);
     if (!std::isfinite(dt_lo))
       throw InputError("no time-step constraint: nothing moves or exerts force; set TimeStepParams::dt_max");
     int K = 0;
