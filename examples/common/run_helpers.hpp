@@ -10,6 +10,7 @@
 #include "rsph/regularize/remap_order.hpp"
 #include "rsph/simulation.hpp"
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cstdint>
@@ -85,6 +86,23 @@ class ConservationLog {
   io::CsvWriter csv_;
 };
 
+/// How a decomposed run shared its work (on more than one rank): ranks, the halo's size against the particles', the
+/// bytes the ranks sent each other per step, and the most wall seconds a rank spent communicating (or waiting for the
+/// others).
+template <class Sim>
+void write_ranks(io::Json& summary, const Sim& sim) {
+  const auto& d = sim.domain();
+  const auto& c = d.counts();
+  const double particles = static_cast<double>(d.sum(sim.particles().n_real));
+  summary.set("ranks", static_cast<std::uint64_t>(d.ranks()));
+  if (d.ranks() == 1) return;  // one rank sends nothing
+  summary.set("halo_fraction", static_cast<double>(d.sum(c.halo_points)) / particles);
+  summary.set("remap_halo_fraction", static_cast<double>(d.sum(c.remap_halo_points)) / particles);
+  summary.set("bytes_sent_per_step", static_cast<double>(d.sum(c.bytes_sent)) / std::max<double>(1, sim.steps()));
+  summary.set("particles_migrated", d.sum(c.migrated)).set("partitions", c.partitions);
+  summary.set("communication_seconds", d.max(d.communication_seconds()));
+}
+
 /// What a run cost, recorded the same way by every scene's run loop: begin(), count_steps() after each
 /// call of step(), finish().
 struct RunCost {
@@ -92,6 +110,7 @@ struct RunCost {
   std::size_t particles_initial = 0, particles_final = 0;
   std::uint64_t steps = 0, updates = 0, regularizations = 0;
   PhaseTimes phases;
+  io::Json ranks;  ///< how the ranks shared the work (write_ranks; empty in a build without MPI)
 
   template <class Sim>
   void begin(const Sim& sim) {
@@ -130,6 +149,7 @@ struct RunCost {
     mean_particles = steps > 0 ? particle_steps[0] / static_cast<double>(steps) : 0.0;
     regularizations = sim.regularizations();
     phases = sim.phase_times();
+    if constexpr (Sim::distributed) write_ranks(ranks, sim);
   }
 
  private:

@@ -144,13 +144,15 @@ class Snapshots {
 };
 
 /// The figures of a run's cost that every summary.json carries: wall seconds, steps, particle updates per
-/// second, the mean particle count, regularizations and their seconds, seconds per phase.
+/// second, the mean particle count, regularizations and their seconds, seconds per phase; on many ranks how they
+/// shared the work (write_ranks).
 inline void write_cost(io::Json& summary, const RunCost& cost) {
   summary.set("wall_seconds", cost.wall_seconds).set("steps", cost.steps);
   summary.set("particle_updates_per_second", static_cast<double>(cost.updates) / cost.wall_seconds);
   summary.set("mean_particles", cost.mean_particles);
   summary.set("regularizations", cost.regularizations).set("regularization_seconds", cost.phases.regularization);
   summary.set("phase_seconds", phase_json(cost.phases));
+  summary.merge(cost.ranks);
 }
 
 /// What describes the run: every resolved parameter, the command line and the version of rsph.
@@ -158,23 +160,6 @@ inline void write_run_record(io::Json& summary, const CommonOptions& common) {
   io::Json parameters;
   for (const auto& [name, value] : common.parameters) parameters.set(name, value);
   summary.set("parameters", parameters).set("command_line", common.command_line).set("version", RSPH_VERSION);
-}
-
-/// How a decomposed run shared its work (on more than one rank): ranks, the halo's size against the particles', the
-/// bytes the ranks sent each other per step, and the most wall seconds a rank spent communicating (or waiting for the
-/// others).
-template <class Sim>
-void write_ranks(io::Json& summary, const Sim& sim) {
-  const auto& d = sim.domain();
-  const auto& c = d.counts();
-  const double particles = static_cast<double>(d.sum(sim.particles().n_real));
-  summary.set("ranks", static_cast<std::uint64_t>(d.ranks()));
-  if (d.ranks() == 1) return;  // one rank sends nothing
-  summary.set("halo_fraction", static_cast<double>(d.sum(c.halo_points)) / particles);
-  summary.set("remap_halo_fraction", static_cast<double>(d.sum(c.remap_halo_points)) / particles);
-  summary.set("bytes_sent_per_step", static_cast<double>(d.sum(c.bytes_sent)) / std::max<double>(1, sim.steps()));
-  summary.set("particles_migrated", d.sum(c.migrated)).set("partitions", c.partitions);
-  summary.set("communication_seconds", d.max(d.communication_seconds()));
 }
 
 /// What the scheme of `sim` did, where it has it: the remap's order (and, for the second, how often the limiter
@@ -189,7 +174,6 @@ void write_scheme(io::Json& summary, const Sim& sim) {
   if constexpr (requires { sim.regularizer().lattice().max_level; })
     summary.set("levels", level_counts(sim.regularizer().log(), sim.steps()));
   GradientSolves::of(sim).write_to(summary);
-  if constexpr (Sim::distributed) write_ranks(summary, sim);
 }
 
 }  // namespace rsph::examples

@@ -75,6 +75,7 @@ struct PulseRun {
   std::vector<PulseCase> results;  // one per shift begun
   std::uint64_t steps = 0, updates = 0;
   double reg_seconds = 0.0;
+  io::Json ranks;  ///< how the ranks shared the last shift's work (on many ranks)
 };
 
 /// One shift: the pulse regularized through every count, its profile, snapshot and widths at each.
@@ -121,6 +122,7 @@ void run_case(scenes::DriftingPulseParams s, const std::vector<int>& counts, con
       run.steps += cost.steps;
       run.updates += cost.updates;
       run.reg_seconds += cost.phases.regularization;
+      run.ranks = cost.ranks;
       fmt::print("shift {:>5}: width after {} regularizations = {:.4f} Delta; mass error {:.1e}\n", shift_tag(s.shift),
                  counts.back(), result.widths.back(), result.mass_error);
     });
@@ -151,7 +153,7 @@ int run_dim(Options opt) {
   summary.set("test", "drifting_pulse").set("cells", base.cells).set("h_over_dx", base.h_over_dx);
   summary.set("remap", base.remap).set("kernel", kernel);
   if (D > 1) summary.set("dim", D);
-  PulseRun run{io::CsvWriter(dir / "widths.csv", width_columns(D)), {}, 0, 0, 0.0};
+  PulseRun run{io::CsvWriter(dir / "widths.csv", width_columns(D)), {}, 0, 0, 0.0, {}};
   ex::Checkpoints checkpoints(common, dir, "rsph-drifting-pulse");
   const auto part = checkpoints.add("program", [&](io::Archive& ar) {
     run.widths.checkpoint(ar, "widths");
@@ -195,6 +197,7 @@ int run_dim(Options opt) {
   summary.set("cases", cases).set("wall_seconds", wall).set("steps", run.steps);
   summary.set("particle_updates_per_second", static_cast<double>(run.updates) / wall);
   summary.set("regularization_seconds", run.reg_seconds);
+  summary.merge(run.ranks);
   ex::write_run_record(summary, common);
   summary.write(dir / "summary.json");
   ex::draw_figure(common, dir, "drifting_pulse");
