@@ -7,9 +7,10 @@ model's halo fractions beside the ones measured at 2 and 4 ranks.
 Per step and rank, with n = N / P particles:
   compute   t_c = n c                          c: measured seconds per particle-step (one thread)
   halo      H = k_h n^(2/3)                    particles; k_h fitted to the measured halo fractions
-  remap     t_r = (f_r c_r n)(1 + R / L)^3     every T steps, a rank remaps its part widened by the remap's
-                                               reach R = 12 h (h = 1.2 spacings), L = n^(1/3) spacings
-  messages  t_m = m_a alpha P + m_r alpha log2 P + b H / beta
+  remap     t_r = (f_r c_r n)(1 + 2 R_c / L)^3 every T steps, a rank builds the old cells of its part widened by
+                                               R_c = 6 h (h = 1.2 spacings), L = n^(1/3) spacings
+  messages  t_m = m_a alpha P + m_r alpha log2 P + b (H + H_r / T) / beta
+            H_r = ((1 + 2 R_r / L)^3 - 1) n: the particles a remap gathers, within R_r = 12 h
             m_a all-to-alls (dense counts: alpha P each), m_r reductions (alpha log2 P each),
             b bytes per halo particle per step
   imbalance a fixed 5 % (Zoltan's tolerance)
@@ -27,6 +28,8 @@ BYTES_PER_HALO = 155.0           # measured: 2.97e6 bytes per step for 19 200 ha
 ALLTOALLS = 30                   # per step: 15 field exchanges (9 for the halos, 6 refreshed), each an MPI_Alltoall
                                  # of counts and an Alltoallv, dense in P
 REDUCTIONS = 23                  # per step: balance (2), time step, h_max (2), fits, due, check, totals (14)
+REMAP_CELLS_IN_H = 6             # a remap builds the old cells of its own particles and of others within 6 h
+REMAP_HALO_IN_H = 12             # and gathers every particle within 12 h (the generators those cells need)
 # measured halo fractions of rsph-sedov --method sph --r-end 0.12, 3D, at P = 2 and 4 (n = N / P)
 MEASURED = [(16, 2, 0.625), (24, 2, 0.417), (32, 2, 0.375), (40, 2, 0.30),
             (16, 4, 1.64), (24, 4, 1.01), (32, 4, 0.89), (40, 4, 0.69)]
@@ -51,9 +54,11 @@ def efficiency(N, P, k_h, rsph=True):
     t_r, t_r_serial = 0.0, 0.0
     if rsph:
         L = n ** (1 / 3)
-        widen = min((1 + 2 * 12 * 1.2 / L) ** 3, P)
+        widen = min((1 + 2 * REMAP_CELLS_IN_H * 1.2 / L) ** 3, P)
         t_r_serial = REMAP * n / STEPS_PER_REMAP
         t_r = t_r_serial * widen
+        gathered = min(((1 + 2 * REMAP_HALO_IN_H * 1.2 / L) ** 3 - 1) * n, N - n)
+        t_m += BYTES_PER_HALO * gathered / BETA / STEPS_PER_REMAP
     useful = t_c + t_r_serial
     total = 1.05 * (t_c + t_r) + t_m
     return useful / total, t_c, t_r, t_m, H / n
