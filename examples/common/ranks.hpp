@@ -2,9 +2,9 @@
 // The programs on many ranks. Built with MPI (RSPH_WITH_MPI, where CMake finds MPI and Zoltan), a program starts
 // and ends MPI itself (the library never does) and runs its scene's simulation with a domain decomposition
 // (mpi/decomposition.hpp) on every rank count, one rank being the serial run bit for bit. Every rank computes
-// the same figures (reductions); rank 0 writes the run's folder, snapshots gathered to it, while the other
-// ranks write their copies of the small files to a private temporary folder, removed at the end
-// (prepare_output), and print nothing. Built without MPI, nothing here does anything.
+// the same figures (reductions); rank 0 writes the run's folder, to whose snapshots every rank adds its own
+// particles in turn, while the other ranks write their copies of the small files to a private temporary folder,
+// removed at the end (prepare_output), and print nothing. Built without MPI, nothing here does anything.
 #include "rsph/core/errors.hpp"
 
 #include <unistd.h>
@@ -117,15 +117,6 @@ std::uint64_t count_over_ranks(const Sim& sim, std::uint64_t n) {
     return sim.domain().sum(n);
   else
     return n;
-}
-
-/// The particles of every rank on rank 0 (empty elsewhere), or the set itself in one process.
-template <class Sim>
-decltype(auto) particles_on_root(const Sim& sim) {
-  if constexpr (Sim::distributed)
-    return sim.domain().gather_on_root(sim.particles());
-  else
-    return (sim.particles());
 }
 
 /// The particles of every rank on every rank, or the set itself in one process: for a measure that needs the

@@ -106,19 +106,23 @@ RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_st
   return cost;
 }
 
-/// A snapshot of `sim` at `path` with the positions of `objects` (io::write_snapshot); on many ranks the
-/// particles are gathered to rank 0, which writes the file.
+/// A snapshot of `sim` at `path` with the positions of `objects` (io::write_snapshot); on many ranks every rank
+/// adds its own particles to rank 0's file in turn (mpi::FileTurns).
 template <class Sim>
 void write_snapshot(const std::filesystem::path& path, const Sim& sim, const std::string& units,
                     std::vector<std::pair<std::string, std::vector<double>>> objects = {}) {
-  if constexpr (Sim::distributed) {
-    const auto all = particles_on_root(sim);
-    auto info = io::describe_run(sim.box(), sim.eos(), units);
-    info.objects = std::move(objects);
-    if (on_root()) io::write_snapshot(path, all, sim.time(), sim.steps(), info);
-  } else {
-    io::write_snapshot(path, sim, units, std::move(objects));
-  }
+  auto info = io::describe_run(sim.box(), sim.eos(), units);
+  info.objects = std::move(objects);
+#ifdef RSPH_WITH_MPI
+  if constexpr (Sim::distributed)
+    if (rank_count() > 1) {
+      const auto& comm = sim.domain().comm();
+      io::write_snapshot(comm.broadcast(path.string()), sim.particles(), sim.time(), sim.steps(), info,
+                         mpi::FileTurns(comm));
+      return;
+    }
+#endif
+  io::write_snapshot(path, sim.particles(), sim.time(), sim.steps(), info);
 }
 
 /// The snapshots of a run in `dir`: snap_00000.h5, snap_00001.h5, ... in the order written.
@@ -127,7 +131,7 @@ class Snapshots {
   /// `units`: the scene's unit system, in words, for the snapshots' `units` attribute.
   explicit Snapshots(std::filesystem::path dir, std::string units = "dimensionless code units")
       : dir_(std::move(dir)), units_(std::move(units)) {}
-  /// On many ranks the particles are gathered to rank 0, which writes the file.
+  /// On many ranks every rank adds its own particles to the one file.
   template <class Sim>
   void write(const Sim& sim) {
     write_snapshot(dir_ / io::snapshot_name(next_++), sim, units_);

@@ -1,3 +1,5 @@
+#include "rsph/io/checkpoint.hpp"
+#include "rsph/io/hdf5_snapshot.hpp"
 #include "rsph/mpi/decomposition.hpp"
 #include "rsph/mpi/file_turns.hpp"
 #include "sedov/scene.hpp"
@@ -8,6 +10,7 @@
 #include <filesystem>
 #include <map>
 #include <random>
+#include <set>
 
 using namespace rsph;
 
@@ -419,4 +422,62 @@ TEST_CASE(
   expect_same(resumed, c);
   c.barrier();
   if (c.rank() == 0) std::filesystem::remove(file);
+}
+
+namespace {
+
+/// Every number of dataset `name` of the HDF5 file `path`, flattened.
+template <class T>
+std::vector<T> read_dataset(const std::filesystem::path& path, const char* name) {
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+  REQUIRE(file >= 0);
+  const hid_t set = H5Dopen2(file, name, H5P_DEFAULT);
+  REQUIRE(set >= 0);
+  const hid_t space = H5Dget_space(set);
+  std::vector<T> v(static_cast<std::size_t>(H5Sget_simple_extent_npoints(space)));
+  H5Sclose(space);
+  const hid_t type = std::is_same_v<T, double> ? H5T_NATIVE_DOUBLE : H5T_NATIVE_UINT64;
+  CHECK(H5Dread(set, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()) >= 0);
+  H5Dclose(set);
+  H5Fclose(file);
+  return v;
+}
+
+}  // namespace
+
+TEST_CASE("Snapshot on many ranks: one file in the serial layout, every rank's particles in it once", "[mpi][io]") {
+  const auto c = world();
+  const auto dir = std::filesystem::temp_directory_path() / ("rsph_mpi_snapshot_" + std::to_string(c.size()));
+  if (c.rank() == 0) std::filesystem::create_directories(dir);
+  scenes::SedovParams s;
+  s.n = 20;
+  auto sim = sedov<SedovRanks<2>>(s, mpi::Decomposition<2>{});
+  for (int i = 0; i < 5; ++i) sim.step();
+  const auto path = dir / io::snapshot_name(3);
+  io::write_snapshot(path, sim.particles(), sim.time(), sim.steps(), {}, mpi::FileTurns(sim.domain().comm()));
+  const auto all = gather_by_id(sim.particles());  // id -> x, v, rho, h, P, u, dv/dt
+  if (c.rank() == 0) {
+    const auto x = read_dataset<double>(path, "x"), rho = read_dataset<double>(path, "rho"),
+               u = read_dataset<double>(path, "u");
+    const auto id = read_dataset<std::uint64_t>(path, "id"), index = read_dataset<std::uint64_t>(path, "index");
+    INFO("written by " << c.size() << " ranks");
+    REQUIRE(id.size() == all.size());
+    REQUIRE(x.size() == 2 * all.size());
+    REQUIRE(rho.size() == all.size());
+    std::set<std::uint64_t> seen;
+    for (std::size_t k = 0; k < id.size(); ++k) {
+      CHECK(index[k] == k);
+      const auto& f = all.at(id[k]);
+      CHECK(x[2 * k] == f[0]);
+      CHECK(x[2 * k + 1] == f[1]);
+      CHECK(rho[k] == f[4]);
+      CHECK(u[k] == f[7]);
+      seen.insert(id[k]);
+    }
+    CHECK(seen.size() == all.size());  // each particle once
+    CHECK(std::filesystem::is_regular_file(dir / "snap_00003.xmf"));
+    CHECK(!std::filesystem::exists(io::temporary_sibling(path)));
+  }
+  c.barrier();
+  if (c.rank() == 0) std::filesystem::remove_all(dir);
 }

@@ -14,6 +14,7 @@
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/io/atomic_file.hpp"
+#include "rsph/io/writing_turns.hpp"
 
 #include <hdf5.h>
 
@@ -48,20 +49,6 @@ class QuietHdf5 {
 /// Which share of a checkpoint one of several processes loads: part `part` of `parts`.
 struct Share {
   std::size_t part = 0, parts = 1;
-};
-
-/// The processes that write one checkpoint together (mpi::FileTurns on the ranks of a communicator): where
-/// each one's rows begin, the sums of their totals, whether all succeeded, and their turns at the file.
-template <class T>
-concept WritingTurns = requires(const T& t, std::vector<std::uint64_t> counts, std::vector<double> reals,
-                                std::vector<std::int64_t> integers, void (*write_part)()) {
-  { t.part() } -> std::convertible_to<std::size_t>;
-  { t.first_rows(counts) } -> std::same_as<std::vector<std::uint64_t>>;  ///< sum of the counts of earlier parts
-  { t.total_rows(counts) } -> std::same_as<std::vector<std::uint64_t>>;
-  { t.sum(reals) } -> std::same_as<std::vector<double>>;
-  { t.sum(integers) } -> std::same_as<std::vector<std::int64_t>>;
-  { t.all(true) } -> std::same_as<bool>;
-  t.in_turn(write_part);  ///< each part after the first, one after another
 };
 
 /// Saves fields into memory and then to a file, or restores them from a file, with one interface.

@@ -1,8 +1,11 @@
 #pragma once
 // HDF5 snapshots: one dataset per field (x and v shaped N x dim), attributes `time`, `step` and `dim`; each
-// with an XDMF description beside it (xdmf.hpp), so that ParaView, VisIt and meshio open it directly.
+// with an XDMF description beside it (xdmf.hpp), so that ParaView, VisIt and meshio open it directly. Several
+// processes (the ranks of a decomposed run, mpi::FileTurns) write one file in the same layout, each its own rows:
+// the first creates every dataset at its full length, the others add theirs in turn.
 #include "rsph/core/particle_set.hpp"
 #include "rsph/io/atomic_file.hpp"
+#include "rsph/io/writing_turns.hpp"
 #include "rsph/io/xdmf.hpp"
 
 #include <hdf5.h>
@@ -10,8 +13,10 @@
 #include <algorithm>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -39,20 +44,47 @@ class H5File {
   hid_t id_ = -1;
 };
 
-/// rows values (cols == 0) or a rows x cols matrix.
-inline void write_dataset(hid_t file, const std::string& name, const double* data, std::size_t rows,
-                          std::size_t cols = 0, hid_t file_type = H5T_IEEE_F64LE, hid_t mem_type = H5T_NATIVE_DOUBLE,
-                          const void* raw = nullptr) {
-  hsize_t dims[2] = {rows, cols};
-  const int rank = cols == 0 ? 1 : 2;
-  const hid_t space = H5Screate_simple(rank, dims, nullptr);
-  const hid_t set = H5Dcreate2(file, name.c_str(), file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  const herr_t status =
-      set >= 0 ? H5Dwrite(set, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, raw ? raw : static_cast<const void*>(data))
-               : -1;
-  if (set >= 0) H5Dclose(set);
-  H5Sclose(space);
-  if (status < 0) throw std::runtime_error("HDF5: writing dataset " + name + " failed");
+/// One dataset of a snapshot with this process's rows of it: `cols` numbers per row (0: one, a vector dataset),
+/// doubles or 64-bit unsigned integers.
+struct Column {
+  std::string name;
+  hsize_t cols = 0;
+  std::vector<double> d;
+  std::vector<std::uint64_t> u;
+  bool integer = false;
+
+  hsize_t rows() const { return (integer ? u.size() : d.size()) / std::max<hsize_t>(cols, 1); }
+};
+
+/// Writes each column's rows from row `first` of its dataset in `file`; with `total` (not on a later turn), the
+/// dataset is created first with that many rows.
+inline bool write_rows(hid_t file, const std::vector<Column>& columns, hsize_t first, std::optional<hsize_t> total) {
+  bool ok = true;
+  for (const auto& c : columns) {
+    const int rank = c.cols == 0 ? 1 : 2;
+    hid_t set = -1;
+    if (total) {
+      const hsize_t dims[2] = {*total, c.cols};
+      const hid_t space = H5Screate_simple(rank, dims, nullptr);
+      set = H5Dcreate2(file, c.name.c_str(), c.integer ? H5T_STD_U64LE : H5T_IEEE_F64LE, space, H5P_DEFAULT,
+                       H5P_DEFAULT, H5P_DEFAULT);
+      H5Sclose(space);
+    } else {
+      set = H5Dopen2(file, c.name.c_str(), H5P_DEFAULT);
+    }
+    if (set < 0) return false;
+    if (const hsize_t n = c.rows(); n > 0) {
+      const hsize_t start[2] = {first, 0}, count[2] = {n, c.cols};
+      const hid_t whole = H5Dget_space(set), memory = H5Screate_simple(rank, count, nullptr);
+      const void* values = c.integer ? static_cast<const void*>(c.u.data()) : static_cast<const void*>(c.d.data());
+      ok = ok && H5Sselect_hyperslab(whole, H5S_SELECT_SET, start, nullptr, count, nullptr) >= 0 &&
+           H5Dwrite(set, c.integer ? H5T_NATIVE_UINT64 : H5T_NATIVE_DOUBLE, memory, whole, H5P_DEFAULT, values) >= 0;
+      H5Sclose(memory);
+      H5Sclose(whole);
+    }
+    ok = H5Dclose(set) >= 0 && ok;
+  }
+  return ok;
 }
 
 template <class T>
@@ -132,52 +164,100 @@ inline void write_info(hid_t file, const SnapshotInfo& info) {
 }
 }  // namespace detail
 
+namespace detail {
+/// The datasets of a snapshot with the real particles of `p` as its rows from `first` on.
+template <int D, bool E>
+std::vector<Column> snapshot_columns(const ParticleSet<D, E>& p, std::uint64_t first) {
+  const std::size_t n = p.n_real;
+  std::vector<Column> c;
+  const auto vectors = [&](const std::vector<Vec<D>>& field, const char* name) {
+    Column col{name, D, std::vector<double>(n * D), {}, false};
+    for (std::size_t a = 0; a < n; ++a)
+      for (int k = 0; k < D; ++k) col.d[a * D + static_cast<std::size_t>(k)] = field[a][k];
+    c.push_back(std::move(col));
+  };
+  const auto scalars = [&](const std::vector<double>& field, const char* name) {
+    c.push_back(
+        {name, 0, std::vector<double>(field.begin(), field.begin() + static_cast<std::ptrdiff_t>(n)), {}, false});
+  };
+  vectors(p.x, "x");
+  vectors(p.v, "v");
+  scalars(p.m, "m");
+  scalars(p.rho, "rho");
+  scalars(p.h, "h");
+  scalars(p.P, "P");
+  if constexpr (E) scalars(p.u, "u");
+  Column index{"index", 1, {}, std::vector<std::uint64_t>(n), true};  // each row's number: a viewer's polyvertex
+  for (std::size_t a = 0; a < n; ++a) index.u[a] = first + a;
+  c.push_back(std::move(index));
+  if (p.id.size() >= n)
+    c.push_back(
+        {"id", 1, {}, std::vector<std::uint64_t>(p.id.begin(), p.id.begin() + static_cast<std::ptrdiff_t>(n)), true});
+  if constexpr (D == 1) {
+    Column xyz{"xyz", 3, std::vector<double>(3 * n, 0.0), {}, false};
+    for (std::size_t a = 0; a < n; ++a) xyz.d[3 * a] = p.x[a][0];
+    c.push_back(std::move(xyz));
+  }
+  return c;
+}
+
+/// Creates the snapshot file `tmp` with every column at `total` rows, writes this process's rows at `first` and
+/// the attributes; false where that failed.
+template <int D>
+bool create_snapshot(const std::filesystem::path& tmp, const std::vector<Column>& columns, hsize_t first, hsize_t total,
+                     double time, std::uint64_t step, const SnapshotInfo& info) {
+  try {
+    H5File file(tmp);
+    const bool ok = write_rows(file.id(), columns, first, total);
+    write_attribute(file.id(), "time", time, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE);
+    write_attribute(file.id(), "step", step, H5T_NATIVE_UINT64, H5T_STD_U64LE);
+    write_attribute(file.id(), "dim", static_cast<std::uint64_t>(D), H5T_NATIVE_UINT64, H5T_STD_U64LE);
+    write_info(file.id(), info);
+    file.close();
+    return ok;
+  } catch (const std::runtime_error&) {
+    return false;
+  }
+}
+
+/// Adds this process's rows at `first` to the snapshot file `tmp` another process created.
+inline bool add_snapshot_rows(const std::filesystem::path& tmp, const std::vector<Column>& columns, hsize_t first) {
+  const hid_t file = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  if (file < 0) return false;
+  const bool ok = write_rows(file, columns, first, std::nullopt);
+  return H5Fclose(file) >= 0 && ok;
+}
+}  // namespace detail
+
 /// Writes the real particles of `p` to `path` (atomically): x, v (N x D), m, rho, h, P, and u when the
 /// gas carries it, index (0 .. N-1, the rows) and id (each particle's identity, renewed by a remap), in 1D also
 /// xyz (N x 3, the positions on the x axis, for viewers that need two or three); attributes time, step and dim,
 /// and what `info` gives: box_lo, box_hi, periodic and edges, eos and its constants eos_NAME, units, and each
-/// body's position object_NAME. Then snap_NNNNN.xmf
-/// beside it and the folder's snapshots.xmf.
-template <int D, bool E>
+/// body's position object_NAME. Then snap_NNNNN.xmf beside it and the folder's snapshots.xmf.
+/// Written by several processes (`turns`; every one calls it with the same path), the file holds every process's
+/// particles in process order, and each process only its own in memory; if one fails, all throw.
+template <int D, bool E, WritingTurns Turns = OneWriter>
 void write_snapshot(const std::filesystem::path& path, const ParticleSet<D, E>& p, double time, std::uint64_t step,
-                    const SnapshotInfo& info = {}) {
+                    const SnapshotInfo& info = {}, const Turns& turns = {}) {
+  const std::uint64_t n = p.n_real, first = turns.first_rows({n}).at(0), total = turns.total_rows({n}).at(0);
+  const auto columns = detail::snapshot_columns(p, first);
   const auto tmp = temporary_sibling(path);
-  {
-    detail::H5File file(tmp);
-    const std::size_t n = p.n_real;
-    std::vector<double> buf(n * D);
-    auto vectors = [&](const std::vector<Vec<D>>& field, const char* name) {
-      for (std::size_t a = 0; a < n; ++a)
-        for (int k = 0; k < D; ++k) buf[a * D + static_cast<std::size_t>(k)] = field[a][k];
-      detail::write_dataset(file.id(), name, buf.data(), n, D);
-    };
-    vectors(p.x, "x");
-    vectors(p.v, "v");
-    detail::write_dataset(file.id(), "m", p.m.data(), n);
-    detail::write_dataset(file.id(), "rho", p.rho.data(), n);
-    detail::write_dataset(file.id(), "h", p.h.data(), n);
-    detail::write_dataset(file.id(), "P", p.P.data(), n);
-    if constexpr (E) detail::write_dataset(file.id(), "u", p.u.data(), n);
-    std::vector<std::uint64_t> index(n);  // each particle's row: the vertices of a viewer's polyvertex
-    for (std::size_t a = 0; a < n; ++a) index[a] = a;
-    detail::write_dataset(file.id(), "index", nullptr, n, 1, H5T_STD_U64LE, H5T_NATIVE_UINT64, index.data());
-    if (p.id.size() >= n)
-      detail::write_dataset(file.id(), "id", nullptr, n, 1, H5T_STD_U64LE, H5T_NATIVE_UINT64, p.id.data());
-    if constexpr (D == 1) {
-      std::vector<double> xyz(3 * n, 0.0);
-      for (std::size_t a = 0; a < n; ++a) xyz[3 * a] = p.x[a][0];
-      detail::write_dataset(file.id(), "xyz", xyz.data(), n, 3);
+  bool ok = turns.part() != 0 || detail::create_snapshot<D>(tmp, columns, first, total, time, step, info);
+  if (turns.all(ok)) turns.in_turn([&] { ok = detail::add_snapshot_rows(tmp, columns, first); });
+  ok = turns.all(ok);
+  if (ok && turns.part() == 0) try {
+      commit_file(tmp, path);
+      std::vector<XdmfField> fields{{"v", D}, {"m", 1}, {"rho", 1}, {"h", 1}, {"P", 1}};
+      if constexpr (E) fields.push_back({"u", 1});
+      write_xdmf(path, total, time, D == 1 ? "xyz" : "x", D == 1 ? 3 : D, fields);
+    } catch (const std::runtime_error&) {
+      ok = false;
     }
-    detail::write_attribute(file.id(), "time", time, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE);
-    detail::write_attribute(file.id(), "step", static_cast<std::uint64_t>(step), H5T_NATIVE_UINT64, H5T_STD_U64LE);
-    detail::write_attribute(file.id(), "dim", static_cast<std::uint64_t>(D), H5T_NATIVE_UINT64, H5T_STD_U64LE);
-    detail::write_info(file.id(), info);
-    file.close();
+  if (!turns.all(ok)) {  // and no process goes on before the file is in place
+    std::error_code ignored;
+    if (turns.part() == 0) std::filesystem::remove(tmp, ignored);
+    throw std::runtime_error("writing the snapshot " + path.string() + " failed");
   }
-  commit_file(tmp, path);
-  std::vector<XdmfField> fields{{"v", D}, {"m", 1}, {"rho", 1}, {"h", 1}, {"P", 1}};
-  if constexpr (E) fields.push_back({"u", 1});
-  write_xdmf(path, p.n_real, time, D == 1 ? "xyz" : "x", D == 1 ? 3 : D, fields);
 }
 
 /// The snapshot of a simulation: its particles, time and step, its box and gas, in `units`, with `objects`.

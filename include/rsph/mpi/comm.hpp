@@ -153,6 +153,16 @@ class Comm {
     return recv;
   }
 
+  /// Rank `root`'s text, on every rank.
+  std::string broadcast(std::string text, int root = 0) const {
+    const Timer t(seconds_);
+    auto n = static_cast<std::uint64_t>(text.size());
+    check(MPI_Bcast(&n, 1, MPI_UINT64_T, root, c_), "MPI_Bcast");
+    text.resize(static_cast<std::size_t>(n));
+    check(MPI_Bcast(text.data(), static_cast<int>(n), MPI_CHAR, root, c_), "MPI_Bcast");
+    return text;
+  }
+
   void barrier() const {
     const Timer t(seconds_);
     check(MPI_Barrier(c_), "MPI_Barrier");

@@ -253,39 +253,19 @@ class Decomposition {
     if (ranks() > 1) comm_->sum_in_place(values);
   }
 
-  /// Every rank's real particles on rank 0, in rank order (fields and identities; rates left out), and an
-  /// empty set on the others: for output, which rank 0 writes alone.
-  template <bool E>
-  ParticleSet<D, E> gather_on_root(const ParticleSet<D, E>& p) const {
-    return collect(p, false);
-  }
-
-  /// Every rank's real particles on every rank, in rank order: for a measure that needs the whole set at once
-  /// (an interface traced through the field), made once at the end of a run.
+  /// Every rank's real particles on every rank, in rank order (fields and identities; rates left out): for a
+  /// measure that needs the whole set at once (an interface traced through the field), made once at the end of a
+  /// run.
   template <bool E>
   ParticleSet<D, E> gather_everywhere(const ParticleSet<D, E>& p) const {
-    return collect(p, true);
-  }
-
-  /// Mass, momentum, angular momentum and energies over every rank's real particles, the same bits at any
-  /// rank count (ExactSum).
-  template <bool E>
-  Conservation<D> totals(const ParticleSet<D, E>& p) const;
-
- private:
-  using Lists = std::vector<std::vector<std::uint32_t>>;
-
-  template <bool E>
-  ParticleSet<D, E> collect(const ParticleSet<D, E>& p, bool everywhere) const {
     if (ranks() == 1) {
       auto all = p;
       all.clear_ghosts();
       return all;
     }
     Lists to(static_cast<std::size_t>(ranks()));
-    for (int q = 0; q < (everywhere ? ranks() : 1); ++q)
-      for (std::size_t a = 0; a < p.n_real; ++a)
-        to[static_cast<std::size_t>(q)].push_back(static_cast<std::uint32_t>(a));
+    for (auto& list : to)
+      for (std::size_t a = 0; a < p.n_real; ++a) list.push_back(static_cast<std::uint32_t>(a));
     ParticleSet<D, E> all;
     all.m = send(p.m, to);
     all.x = send(p.x, to);
@@ -303,6 +283,14 @@ class Decomposition {
     all.next_id = p.next_id;
     return all;
   }
+
+  /// Mass, momentum, angular momentum and energies over every rank's real particles, the same bits at any
+  /// rank count (ExactSum).
+  template <bool E>
+  Conservation<D> totals(const ParticleSet<D, E>& p) const;
+
+ private:
+  using Lists = std::vector<std::vector<std::uint32_t>>;
 
   template <bool E>
   void receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle);

@@ -1,9 +1,9 @@
 #pragma once
-// The ranks of a communicator writing one checkpoint file together (io::WritingTurns): the offsets of their
-// rows, the sums of their totals, and their turns at the file, one rank after another, so that the file stays
-// in the serial layout with the serial HDF5 library and each rank holds only its own particles. Link rsph::mpi
-// and rsph::io.
-#include "rsph/io/checkpoint.hpp"
+// The ranks of a communicator writing one file together, a checkpoint or a snapshot (io::WritingTurns): the
+// offsets of their rows, the sums of their totals, and their turns at the file, one rank after another, so that
+// the file stays in the serial layout with the serial HDF5 library and each rank holds only its own particles.
+// Link rsph::mpi and rsph::io.
+#include "rsph/io/writing_turns.hpp"
 #include "rsph/mpi/comm.hpp"
 
 #include <algorithm>
