@@ -47,7 +47,7 @@ TEST_CASE("Kelvin-Helmholtz at density ratio 10: RSPH grows the seeded mode", "[
 TEST_CASE(
     "Kelvin-Helmholtz: RSPH's growth converges towards linear theory, 5x the seed and rolled-up billows at "
     "tau_KH by 1/Delta = 516",
-    "[kelvin_helmholtz]") {
+    "[kelvin_helmholtz][long]") {
   // At reduced resolution the remap mixes the interface rows (an s (1 - s) / 8 share of each cell per remap,
   // test_remap.cpp) and slows the mode (2x the seed at 1/Delta = 128, 4.5x at the paper's 256); the issue's
   // 5x holds once the interface is resolved. One wavelength of the six: the box is periodic, so the seeded
@@ -121,7 +121,7 @@ TEST_CASE("Kelvin-Helmholtz: the remaps widen an unseeded shear layer, which sta
 TEST_CASE(
     "Kelvin-Helmholtz at chi = 10 without conductivity: plain SPH keeps the phases apart with a pressure blip at "
     "the contact, where RSPH's remaps mix the interface",
-    "[kelvin_helmholtz]") {
+    "[kelvin_helmholtz][long]") {
   // The failure Agertz et al. (2007) and Price (2008) describe, at 1/Delta = 128 by tau_KH (measured): plain SPH
   // (grad-h, equal masses) holds 1.3 % of the area at densities between the phases' and its pressure strays
   // by 10.5 % rms (P / P_0 from 0.14 to 1.98); RSPH holds 4.6 % mixed and strays by 4.3 % (0.73 to 1.28). The
@@ -144,7 +144,7 @@ TEST_CASE(
 }
 
 TEST_CASE("Kelvin-Helmholtz in 3D: the chi = 10 layer extruded along z grows as in 2D, with little motion along z",
-          "[kelvin_helmholtz][3d]") {
+          "[kelvin_helmholtz][long][3d]") {
   // One wavelength at 1/Delta = 192, eight spacings deep (periodic). Measured: 2D first order 2.8x the seed by
   // tau_KH, 3D 3.5x (first order) and 3.6x (second); at 1/Delta = 96 the 3D mode still decays (0.6x, 1.3x).
   scenes::KelvinHelmholtzParams s;

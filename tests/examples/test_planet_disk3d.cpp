@@ -100,7 +100,7 @@ TEST_CASE("3D disk: RSPH's lattice and SPH's columns fill the flared disk with S
 }
 
 TEST_CASE("3D disk, reduced: RSPH keeps the mass, the vertical equilibrium and opens the gap's start",
-          "[examples][disk][3d]") {
+          "[examples][disk][3d][long]") {
   auto s = reduced_3d_disk();
   s.orbits = 2.0;
   for (const std::string remap : {"first", "second"}) {

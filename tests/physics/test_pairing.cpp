@@ -62,7 +62,7 @@ std::pair<Spacing, Spacing> evolve(double eta) {
 }  // namespace
 
 TEST_CASE("pairing in 3D: the cubic spline pairs at h/Delta = 2 (268 neighbours), Wendland C2 and C4 do not",
-          "[physics][3d][pairing]") {
+          "[physics][3d][pairing][long]") {
   SECTION("cubic spline, h/Delta = 2: a quarter of the particles paired, the mean spacing shrinking") {
     const auto [early, late] = evolve<kernel::CubicSpline>(2.0);
     INFO("mean spacing " << early.mean << " -> " << late.mean << ", paired " << early.close << " -> " << late.close);
