@@ -198,14 +198,9 @@ class Archive {
     }
     const Layout layout{turns.first_rows(counts), turns.total_rows(counts), turns.sum(reals), turns.sum(integers)};
     const auto tmp = temporary_sibling(path);
-    bool ok = turns.part() != 0 || create(tmp, layout);
-    if (turns.all(ok)) turns.in_turn([&] { ok = add_rows(tmp, layout); });
-    ok = turns.all(ok);
-    if (ok && turns.part() == 0) ok = committed(tmp, path);
-    if (!turns.all(ok)) {  // and no process goes on before the file is in place
-      if (turns.part() == 0) std::filesystem::remove(tmp);
-      throw std::runtime_error("writing the checkpoint " + tmp.string() + " on many processes failed");
-    }
+    write_in_turns(
+        turns, tmp, [&] { return create(tmp, layout); }, [&] { return add_rows(tmp, layout); },
+        [&] { return committed(tmp, path); }, "writing the checkpoint " + tmp.string() + " on many processes failed");
   }
 
  private:

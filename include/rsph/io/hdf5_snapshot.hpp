@@ -16,7 +16,6 @@
 #include <optional>
 #include <stdexcept>
 #include <string>
-#include <system_error>
 #include <utility>
 #include <vector>
 
@@ -242,22 +241,21 @@ void write_snapshot(const std::filesystem::path& path, const ParticleSet<D, E>& 
   const std::uint64_t n = p.n_real, first = turns.first_rows({n}).at(0), total = turns.total_rows({n}).at(0);
   const auto columns = detail::snapshot_columns(p, first);
   const auto tmp = temporary_sibling(path);
-  bool ok = turns.part() != 0 || detail::create_snapshot<D>(tmp, columns, first, total, time, step, info);
-  if (turns.all(ok)) turns.in_turn([&] { ok = detail::add_snapshot_rows(tmp, columns, first); });
-  ok = turns.all(ok);
-  if (ok && turns.part() == 0) try {
+  const auto commit = [&] {
+    try {
       commit_file(tmp, path);
       std::vector<XdmfField> fields{{"v", D}, {"m", 1}, {"rho", 1}, {"h", 1}, {"P", 1}};
       if constexpr (E) fields.push_back({"u", 1});
       write_xdmf(path, total, time, D == 1 ? "xyz" : "x", D == 1 ? 3 : D, fields);
+      return true;
     } catch (const std::runtime_error&) {
-      ok = false;
+      return false;
     }
-  if (!turns.all(ok)) {  // and no process goes on before the file is in place
-    std::error_code ignored;
-    if (turns.part() == 0) std::filesystem::remove(tmp, ignored);
-    throw std::runtime_error("writing the snapshot " + path.string() + " failed");
-  }
+  };
+  write_in_turns(
+      turns, tmp, [&] { return detail::create_snapshot<D>(tmp, columns, first, total, time, step, info); },
+      [&] { return detail::add_snapshot_rows(tmp, columns, first); }, commit,
+      "writing the snapshot " + path.string() + " failed");
 }
 
 /// The snapshot of a simulation: its particles, time and step, its box and gas, in `units`, with `objects`.

@@ -5,6 +5,10 @@
 #include <concepts>
 #include <cstddef>
 #include <cstdint>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <system_error>
 #include <vector>
 
 namespace rsph::io {
@@ -38,5 +42,23 @@ struct OneWriter {
 };
 
 static_assert(WritingTurns<OneWriter>);
+
+/// One file written by every part of `turns` at the temporary path `tmp`: part 0 creates it (create(), with its
+/// own rows), the others add theirs in turn (add()), and part 0 puts it in place (commit()); each returns false
+/// where it failed. Every part calls it; if one failed, all throw `failure` (and part 0 removes `tmp`), and no part
+/// goes on before the file is in place.
+template <WritingTurns Turns, class Create, class Add, class Commit>
+void write_in_turns(const Turns& turns, const std::filesystem::path& tmp, Create&& create, Add&& add, Commit&& commit,
+                    const std::string& failure) {
+  bool ok = turns.part() != 0 || create();
+  if (turns.all(ok)) turns.in_turn([&] { ok = add(); });
+  ok = turns.all(ok);
+  if (ok && turns.part() == 0) ok = commit();
+  if (!turns.all(ok)) {
+    std::error_code ignored;
+    if (turns.part() == 0) std::filesystem::remove(tmp, ignored);
+    throw std::runtime_error(failure);
+  }
+}
 
 }  // namespace rsph::io
