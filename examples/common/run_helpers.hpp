@@ -214,23 +214,28 @@ struct GradientSolves {
 
 /// Particles per resolution level from a regularization log: the counts the last regularization left
 /// and their average over steps (each regularization's counts weighted by the steps until the next).
-template <class Log>
-io::Json level_counts(const Log& log, std::uint64_t total_steps) {
+/// `sum(values)` adds the values up over the ranks (each rank's log counts the particles it kept).
+template <class Log, class Sum>
+io::Json level_counts(const Log& log, std::uint64_t total_steps, Sum&& sum) {
   io::Json j;
   if (log.empty()) return j;
-  std::vector<double> mean(log.back().stats.per_level.size(), 0.0);
+  const std::size_t n_levels = log.back().stats.per_level.size();
+  std::vector<double> mean(n_levels, 0.0), last(n_levels, 0.0);  // [0, n): the time average; then the last
   for (std::size_t k = 0; k < log.size(); ++k) {
     const std::uint64_t until = k + 1 < log.size() ? log[k + 1].step : total_steps;
     const auto steps = static_cast<double>(until - log[k].step);
     for (std::size_t l = 0; l < std::min(mean.size(), log[k].stats.per_level.size()); ++l)
       mean[l] += steps * static_cast<double>(log[k].stats.per_level[l]);
   }
+  for (std::size_t l = 0; l < n_levels; ++l) last[l] = static_cast<double>(log.back().stats.per_level[l]);
+  sum(std::span<double>(mean));
+  sum(std::span<double>(last));
   const double span = static_cast<double>(std::max<std::uint64_t>(total_steps - log.front().step, 1));
   std::vector<io::Json> per_level;
   for (std::size_t l = 0; l < mean.size(); ++l) {
     io::Json e;
     e.set("level", static_cast<std::uint64_t>(l))
-        .set("final", static_cast<std::uint64_t>(log.back().stats.per_level[l]))
+        .set("final", static_cast<std::uint64_t>(std::llround(last[l])))
         .set("time_average", mean[l] / span);
     per_level.push_back(e);
   }

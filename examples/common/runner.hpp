@@ -176,7 +176,8 @@ void write_scheme(io::Json& summary, const Sim& sim) {
     sim.regularizer().order_figures([&](const char* name, auto value) { summary.set(name, value); });
   }
   if constexpr (requires { sim.regularizer().lattice().max_level; })
-    summary.set("levels", level_counts(sim.regularizer().log(), sim.steps()));
+    summary.set("levels", level_counts(sim.regularizer().log(), sim.steps(),
+                                       [&](std::span<double> values) { sum_over_ranks(sim, values); }));
   GradientSolves::of(sim).write_to(summary);
 }
 

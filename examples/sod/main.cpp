@@ -91,8 +91,8 @@ int run(const Options& opt, Sim sim) {
   return 0;
 }
 
-/// SPH in any dimension and RSPH in 3D run on the ranks of mpiexec where built with MPI (ex::with_ranks);
-/// RSPH's multi-level lattices in 1D and 2D run in one process.
+/// Both methods run on the ranks of mpiexec where built with MPI (ex::with_ranks), RSPH's multi-level lattices
+/// too; consistent gradients run in one process.
 template <int D, class Kernel>
 int run_method(const Options& opt) {
   if (opt.method == "sph")
@@ -106,10 +106,13 @@ int run_method(const Options& opt) {
           return run<D, Kernel>(opt, scenes::make_rsph_sod3<Kernel, Order>(opt.sod, opt.rsph, domain...));
         });
       } else {
-        ex::in_one_process("rsph-sod --method rsph in 1D and 2D (a multi-level lattice)");
-        if (opt.consistent_gradient)
+        if (opt.consistent_gradient) {
+          ex::in_one_process("rsph-sod --consistent-gradient");
           return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, opt.gradient));
-        return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph));
+        }
+        return ex::with_ranks<D>([&](auto... domain) {
+          return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, domain...));
+        });
       }
     });
   throw InputError("unknown method '" + opt.method + "' (sph, rsph)");

@@ -92,7 +92,7 @@ class Simulation {
   static constexpr bool distributed = (DomainDecomposition<Terms, D> || ...);
   static_assert((int(DomainDecomposition<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one decomposition");
   static_assert(!distributed || regularize::remaps_on_ranks<Reg>(),
-                "this regularizer does not run on many ranks: its lattice depends on the whole gas (rings, levels)");
+                "this regularizer does not run on many ranks: its sites follow the whole gas (the rings lattice)");
   static_assert(!distributed || !corrected, "consistent gradients do not run on many ranks yet");
 
   Simulation(Particles particles, Box<D> box, EOS eos, Reg reg, TimeStepParams params, Terms... terms)
@@ -317,13 +317,14 @@ class Simulation {
     for (std::size_t a = 0; a < p_.n_real; ++a) h_max = std::max(h_max, p_.h[a]);
     h_max = d.max(h_max);
     const std::size_t n_own = d.add_remap_halo(p_, box_, d.remap_reach_in_h() * h_max);
-    const auto old_x = p_.x;
-    const auto old_id = p_.id;
     const auto cells = d.remap_cells(p_, box_, n_own, 0.5 * d.remap_reach_in_h() * h_max);
+    const auto owners = d.site_owners(p_, box_, n_own, Kernel::support * h_max);
     auto info = step_info();
-    info.part = {cells, [&d](double v) { return d.max(v); }};
+    info.part = {cells, [&d](double v) { return d.max(v); },
+                 [&owners](std::span<const double> sites) { return owners.owns(sites); },
+                 [&d](std::span<double> v) { d.sum_in_place(v); }};
     reg_.remap(p_, box_, info);
-    d.keep_owned_sites(p_, box_, old_x, old_id, n_own, Kernel::support * h_max);
+    d.keep_owned_sites(p_, owners);
     const auto after = totals();
     if (!(std::abs(after.mass - before.mass) <= 1e-12 * before.mass))
       throw NumericalError("the remap on " + std::to_string(d.ranks()) + " ranks changed the mass by " +

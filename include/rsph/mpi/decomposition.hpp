@@ -11,6 +11,7 @@
 #include "rsph/boundary/ghosts.hpp"
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/core/exact_sum.hpp"
+#include "rsph/core/parallel.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/mpi/comm.hpp"
 #include "rsph/mpi/partition.hpp"
@@ -26,6 +27,67 @@
 #include <vector>
 
 namespace rsph::mpi {
+
+/// Which rank keeps a point after a remap: the one whose old particle is nearest to it (periodic images included,
+/// ties to the lower identity). Made on every rank from its local set before the remap (its own particles first,
+/// then the other ranks' out to the remap's reach), it answers alike on every rank for a point within `reach` of
+/// an old particle: each new site is one rank's, the one whose gas was there.
+template <int D>
+class SiteOwners {
+ public:
+  SiteOwners(const std::vector<Vec<D>>& x, const std::vector<std::uint64_t>& id, std::size_t n_own, const Box<D>& box,
+             double reach)
+      : id_(id), n_own_(n_own), reach_(reach), pts_(x), of_(x.size()) {
+    for (std::size_t i = 0; i < of_.size(); ++i) of_[i] = static_cast<std::uint32_t>(i);
+    for (int k = 0; k < D; ++k) {  // images of the points near periodic faces
+      if (!box.periodic(k)) continue;
+      const double L = box.hi[k] - box.lo[k];
+      const std::size_t n = pts_.size();
+      for (std::size_t i = 0; i < n; ++i)
+        for (double shift : {-L, L}) {
+          Vec<D> y = pts_[i];
+          y[k] += shift;
+          if (y[k] >= box.lo[k] - reach && y[k] <= box.hi[k] + reach) {
+            pts_.push_back(y);
+            of_.push_back(of_[i]);
+          }
+        }
+    }
+    cells_.build(pts_, reach);
+  }
+
+  /// Whether `site` is this rank's.
+  bool owned(const Vec<D>& site) const {
+    const std::size_t none = id_.size();
+    for (double r = reach_;; r *= 2.0) {
+      double best = std::numeric_limits<double>::infinity();
+      std::size_t who = none;
+      cells_.for_each_within(site, r, [&](std::uint32_t j) {
+        const double d2 = (pts_[j] - site).squaredNorm();
+        const std::size_t o = of_[j];
+        if (d2 < best || (d2 == best && who < none && id_[o] < id_[who])) best = d2, who = o;
+      });
+      if (who < none && best <= r * r) return who < n_own_;
+      require(r < 1e6 * reach_, "regularization: a new site has no old particle near it");
+    }
+  }
+  /// Per point of `sites` (D coordinates after another): whether it is this rank's.
+  std::vector<std::uint8_t> owns(std::span<const double> sites) const {
+    std::vector<std::uint8_t> mine(sites.size() / D);
+    rsph::run_parallel(mine.size(), [&](int, std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) mine[i] = owned(Eigen::Map<const Vec<D>>(sites.data() + D * i));
+    });
+    return mine;
+  }
+
+ private:
+  std::vector<std::uint64_t> id_;
+  std::size_t n_own_;
+  double reach_;
+  std::vector<Vec<D>> pts_;
+  std::vector<std::uint32_t> of_;  ///< the particle each point (or image) is
+  neighbors::CellList<D> cells_;
+};
 
 /// When the partition is recomputed, and how a set built alike on every rank is first shared out.
 struct DecompositionParams {
@@ -228,13 +290,21 @@ class Decomposition {
     return only;
   }
 
-  /// After the remap of the local set: keeps the new particles whose site's nearest old particle (old_x, old_id,
-  /// this rank's own the first n_own; ties to the lower identity) was this rank's, so that every site is kept by
-  /// exactly one rank, the one that held the gas there. They are numbered after all ranks' particles so far, rank
-  /// by rank (on one rank as the serial run numbers them).
+  /// After add_remap_halo: which rank keeps each new site, from the local set (this rank's own the first n_own),
+  /// for sites within `reach` of an old particle.
   template <bool E>
-  void keep_owned_sites(ParticleSet<D, E>& p, const Box<D>& box, const std::vector<Vec<D>>& old_x,
-                        const std::vector<std::uint64_t>& old_id, std::size_t n_own, double reach);
+  SiteOwners<D> site_owners(const ParticleSet<D, E>& p, const Box<D>& box, std::size_t n_own, double reach) const {
+    return SiteOwners<D>(p.x, p.id, n_own, box, reach);
+  }
+
+  /// After the remap of the local set: keeps the new particles whose site is this rank's (`owners`, made before
+  /// the remap), so that every site is kept by exactly one rank, the one that held the gas there. They are
+  /// numbered after all ranks' particles so far, rank by rank (on one rank as the serial run numbers them).
+  template <bool E>
+  void keep_owned_sites(ParticleSet<D, E>& p, const SiteOwners<D>& owners) {
+    if (ranks() > 1) p.erase_if([&](std::size_t a) { return !owners.owned(p.x[a]); });
+    renumber(p);
+  }
 
   /// New identities for the real particles, after every rank's earlier ones and rank by rank.
   template <bool E>
@@ -400,49 +470,6 @@ void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, do
     p.du_dt.resize(p.x.size(), 0.0);
   }
   for (std::size_t g = 0; g < halo_count_; ++g) p.ghost_source.push_back(std::uint32_t(halo_first_ + g));
-}
-
-template <int D>
-template <bool E>
-void Decomposition<D>::keep_owned_sites(ParticleSet<D, E>& p, const Box<D>& box, const std::vector<Vec<D>>& old_x,
-                                        const std::vector<std::uint64_t>& old_id, std::size_t n_own, double reach) {
-  if (ranks() > 1) {
-    // the old points and their periodic images near the faces, each with the index of its particle
-    std::vector<Vec<D>> pts(old_x);
-    std::vector<std::uint32_t> of(old_x.size());
-    for (std::size_t i = 0; i < of.size(); ++i) of[i] = static_cast<std::uint32_t>(i);
-    for (int k = 0; k < D; ++k) {
-      if (!box.periodic(k)) continue;
-      const double L = box.hi[k] - box.lo[k];
-      const std::size_t n = pts.size();
-      for (std::size_t i = 0; i < n; ++i)
-        for (double s : {-L, L}) {
-          Vec<D> y = pts[i];
-          y[k] += s;
-          if (y[k] >= box.lo[k] - reach && y[k] <= box.hi[k] + reach) {
-            pts.push_back(y);
-            of.push_back(of[i]);
-          }
-        }
-    }
-    neighbors::CellList<D> cells;
-    cells.build(pts, reach);
-    const auto owned = [&](const Vec<D>& site) {
-      for (double r = reach;; r *= 2.0) {
-        double best = std::numeric_limits<double>::infinity();
-        std::size_t who = old_x.size();
-        cells.for_each_within(site, r, [&](std::uint32_t j) {
-          const double d2 = (pts[j] - site).squaredNorm();
-          const std::size_t o = of[j];
-          if (d2 < best || (d2 == best && who < old_x.size() && old_id[o] < old_id[who])) best = d2, who = o;
-        });
-        if (who < old_x.size() && best <= r * r) return who < n_own;
-        require(r < 1e6 * reach, "regularization: a new site has no old particle near it");
-      }
-    };
-    p.erase_if([&](std::size_t a) { return !owned(p.x[a]); });
-  }
-  renumber(p);
 }
 
 template <int D>

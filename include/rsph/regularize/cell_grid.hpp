@@ -75,14 +75,15 @@ double max_smoothing_length(const ParticleSet<D, E>& p) {
 /// The candidate cells: the whole box on closed axes, the particles' extent plus the closing radius on
 /// open ones, there rounded out to whole multiples of `align` cells (counted from box.lo). Only an index
 /// range: a remap sums into it densely or, where it holds many cells per particle, sparsely (sums.hpp).
+/// `whole`: on many ranks, the extent is every rank's particles', so that every rank lays out the same grid.
 template <class Lattice, int D, bool E>
 CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
-                           const RemapParams& params, std::int64_t align = 1) {
+                           const RemapParams& params, std::int64_t align = 1, const RankPart& whole = {}) {
   CellGrid<D> g;
   g.periods = lattice.periods(box);
   const std::size_t n_old = p.n_real;
   Vec<D> lo, hi;
-  const double max_h = max_smoothing_length(p);
+  const double max_h = whole.max(max_smoothing_length(p));
   for (int k = 0; k < D; ++k) {
     if (box.edge[k] == Edge::open) {
       lo[k] = std::numeric_limits<double>::max();
@@ -91,6 +92,8 @@ CellGrid<D> candidate_grid(const ParticleSet<D, E>& p, const Box<D>& box, const 
         lo[k] = std::min(lo[k], p.x[a][k]);
         hi[k] = std::max(hi[k], p.x[a][k]);
       }
+      lo[k] = whole.min(lo[k]);
+      hi[k] = whole.max(hi[k]);
       lo[k] -= params.closing_radius_in_h * max_h * 1.1;
       hi[k] += params.closing_radius_in_h * max_h * 1.1;
     } else {

@@ -211,7 +211,7 @@ struct FaceHandOut {
 };
 
 /// The old cells that may meet a face cell: those whose disc of reach (from the overlap pass) touches a
-/// finest cell a face cell owns.
+/// finest cell a face cell owns; a cell the overlap pass did not build (reach -1) is left out.
 template <bool E>
 std::vector<std::uint32_t> old_cells_near_faces(const ParticleSet<2, E>& p, const Box<2>& box,
                                                 const lattice::Square& fine, const CellGrid<2>& grid,
@@ -222,6 +222,7 @@ std::vector<std::uint32_t> old_cells_near_faces(const ParticleSet<2, E>& p, cons
   for (std::size_t f = 0; f < grid.n_cells; ++f) in_face[f] = faces.face_of[fp.owner[f]] >= 0;
   std::vector<std::uint32_t> near_faces;
   for (std::size_t a = 0; a < p.n_real; ++a) {
+    if (reach[a] < 0.0) continue;
     const auto r = fine.cells_touching(box, p.x[a] - Vec<2>::Constant(reach[a]), p.x[a] + Vec<2>::Constant(reach[a]));
     bool meets = false;
     for (std::int64_t i = r.lo[0]; i <= r.hi[0]; ++i)

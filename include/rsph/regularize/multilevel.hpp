@@ -39,11 +39,11 @@ void check_whole_blocks(const Box<D>& box, const lattice::MultiLevel<D, Criterio
     }
 }
 
-/// The level-0 mass and volume per block cell that the criteria read, summed from the finest cells' sums;
-/// block0 receives the absolute index of the grid's first block.
-template <int D, class Criterion>
+/// The level-0 mass and volume per block cell that the criteria read, summed from the finest cells' mass and
+/// volume (`finest(f)` gives the pair of cell f); block0 receives the absolute index of the grid's first block.
+template <int D, class Criterion, class Finest>
 refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box,
-                                   const CellGrid<D>& grid, const Sums<D>& S, BlockIndex<D>& block0) {
+                                   const CellGrid<D>& grid, Finest&& finest, BlockIndex<D>& block0) {
   const std::int64_t ratio = std::int64_t{1} << ml.max_level;  // finest cells per level-0 cell and axis
   const std::int64_t align = ratio * ml.block_cells;           // finest cells per block and axis
   refine::BlockField<D> field;
@@ -63,17 +63,53 @@ refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, 
   field.mass.assign(n_level0, 0.0);
   field.volume.assign(n_level0, 0.0);
   for (std::size_t f = 0; f < grid.n_cells; ++f) {
-    if (S.cell[f].volume == 0.0) continue;
+    const auto [m, volume] = finest(f);
+    if (volume == 0.0) continue;
     const auto idx = grid.unflat(f);
     std::size_t c = 0;
     for (int k = D - 1; k >= 0; --k) {
       const auto kk = static_cast<std::size_t>(k);
       c = c * static_cast<std::size_t>(n0[kk]) + static_cast<std::size_t>((idx[kk] - grid.range.lo[kk]) / ratio);
     }
-    field.mass[c] += S.cell[f].m;
-    field.volume[c] += S.cell[f].volume;
+    field.mass[c] += m;
+    field.volume[c] += volume;
   }
   return field;
+}
+
+/// The field the criteria read: from this process's sums, or on many ranks (every rank lays out the same grid)
+/// the whole set's, each finest cell's mass and volume taken from the rank that owns it, whose overlaps there
+/// are complete. Every rank then holds the same bits, as one process would sum them in the same order.
+template <int D, class Criterion, class Lattice>
+refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box, const Lattice& fine,
+                                   const CellGrid<D>& grid, const Sums<D>& S, const RankPart& part,
+                                   BlockIndex<D>& block0) {
+  if (!part.on_ranks())
+    return level0_field(
+        ml, box, grid,
+        [&](std::size_t f) {
+          return std::pair{S.cell[f].m, S.cell[f].volume};
+        },
+        block0);
+  std::vector<std::size_t> covered;  // the cells some old cell built here meets
+  std::vector<double> sites;
+  for (std::size_t f = 0; f < grid.n_cells; ++f)
+    if (S.cell[f].volume != 0.0) {
+      covered.push_back(f);
+      const Vec<D> x = fine.site(box, grid.unflat(f));
+      sites.insert(sites.end(), x.data(), x.data() + D);
+    }
+  const auto mine = part.owns(sites);
+  std::vector<double> mv(2 * grid.n_cells, 0.0);  // the owners' mass and volume, the others' zero
+  for (std::size_t i = 0; i < covered.size(); ++i)
+    if (mine[i]) mv[2 * covered[i]] = S.cell[covered[i]].m, mv[2 * covered[i] + 1] = S.cell[covered[i]].volume;
+  part.sum_over_ranks(mv);
+  return level0_field(
+      ml, box, grid,
+      [&](std::size_t f) {
+        return std::pair{mv[2 * f], mv[2 * f + 1]};
+      },
+      block0);
 }
 
 /// Block b's absolute index (the grid's blocks start at block0).
@@ -166,11 +202,11 @@ template <int D, bool E, class Criterion, class Field, class Levels>
 void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml, const RemapParams& params,
                     const CellGrid<D>& grid, const Footprint<D>& fp, const Field& field, const Levels& level,
                     const BlockIndex<D>& block0, Sums<D>& cells, const std::vector<double>& cell_volume,
-                    RemapWorkspace<D>& ws, RemapStats& stats) {
+                    RemapWorkspace<D>& ws, RemapStats& stats, const RankPart& part) {
   auto& keep = ws.keep;
   hand_on_sparse_cells<D>(
       cells, params, [&](std::size_t c) { return cell_volume[c]; },
-      [&](std::size_t c, auto&& f) { for_each_ring_neighbour(grid, fp, c, f); }, stats.dropped_cells, keep);
+      [&](std::size_t c, auto&& f) { for_each_ring_neighbour(grid, fp, c, f); }, stats.dropped_cells, keep, part);
   const std::size_t n_cells = fp.size();
   const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;
   auto& order = ws.order;
@@ -195,8 +231,18 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
   };
   emit_particles(p, cells, keep, order, place, stats);
   stats.per_level.assign(static_cast<std::size_t>(ml.max_level) + 1, 0);
+  std::vector<std::size_t> emitted;
+  std::vector<double> sites;
   for (std::size_t c = 0; c < n_cells; ++c)
-    if (keep[c] && cells.cell[c].m > 0.0) ++stats.per_level[static_cast<std::size_t>(fp.level[c])];
+    if (keep[c] && cells.cell[c].m > 0.0) {
+      emitted.push_back(c);
+      const Vec<D> x = fp.site(c);
+      sites.insert(sites.end(), x.data(), x.data() + D);
+    }
+  // on many ranks, the sites this rank keeps (mpi::Decomposition::keep_owned_sites drops the others)
+  const auto mine = part.on_ranks() ? part.owns(sites) : std::vector<std::uint8_t>(emitted.size(), 1);
+  for (std::size_t i = 0; i < emitted.size(); ++i)
+    if (mine[i]) ++stats.per_level[static_cast<std::size_t>(fp.level[emitted[i]])];
   std::map<std::array<std::int64_t, D>, int> levels;
   for (std::size_t b = 0; b < level.size(); ++b) levels[absolute_block(field, block0, b)] = level[b];
   ml.store_levels(std::move(levels));
@@ -207,17 +253,19 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
 /// takes the old cells that reach a face cell to first order, as the face cells' hand-out is). Then every
 /// block's level from the criterion (capped at the finest level, 2:1 balanced), one particle per kept cell,
 /// block by block and in lattice order within a block, with h = h_over_dx * Delta_l.
+/// `part`: on many ranks, the levels are every rank's alike, chosen from the whole set's field; the old cells
+/// built again at faces are among those built for the sums.
 template <int D, class Criterion, class Builder, bool E, class Region, class SumsOn, class AtFaces>
 RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                              Builder& builder, const RemapParams& params, const Region& region, RemapWorkspace<D>& ws,
-                             const CellGrid<D>& grid, SumsOn&& sums_on, AtFaces&& at_faces) {
+                             const CellGrid<D>& grid, SumsOn&& sums_on, AtFaces&& at_faces, const RankPart& part) {
   const auto fine = ml.finest();
   const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;  // finest cells per block and axis
   RemapStats stats;
   const Sums<D>* S = &sums_on(grid, stats);
   stats.max_volume_mismatch = S->max_mismatch;
   std::array<std::int64_t, D> block0{};
-  const auto field = level0_field(ml, box, grid, *S, block0);
+  const auto field = level0_field(ml, box, fine, grid, *S, part, block0);
   const auto level = choose_levels(ml, field, block0, stats);
   const auto fp = footprint(field, level, grid, ml.max_level, align, fine.spacing);
   Faces faces;
@@ -237,34 +285,35 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
     else
       remap_face_cells(p, box, fine, params, grid, fp, faces, cells, cell_volume);
   }
-  emit_on_levels(p, ml, params, grid, fp, field, level, block0, cells, cell_volume, ws, stats);
+  emit_on_levels(p, ml, params, grid, fp, field, level, block0, cells, cell_volume, ws, stats, part);
   return stats;
 }
 
 }  // namespace detail
 
 /// Remaps `p` onto a multi-level lattice (detail::remap_onto_levels), each old cell handing out its mean by
-/// eqs. (6)-(9). Mass, momentum and total energy are conserved exactly as on a uniform lattice. Every old cell
-/// is built (`part` must be empty: multi-level lattices remap in one process).
+/// eqs. (6)-(9). Mass, momentum and total energy are conserved exactly as on a uniform lattice. `part`: on many
+/// ranks, the old cells built and the reductions; every rank lays out the whole set's grid and levels.
 template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                               Builder& builder, const RemapParams& params, const Region& region = {},
                               RemapWorkspace<D>* workspace = nullptr, const RankPart& part = {}) {
-  require(part.cells.empty() && !part.max_over_ranks, "a multi-level lattice remaps in one process");
   ml.validate();
   RemapWorkspace<D> local;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   const auto fine = ml.finest();
   detail::check_remap_input(p, fine, params);
   detail::check_whole_blocks(box, ml);
-  const auto grid = detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells);
+  const auto grid =
+      detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells, part);
   return detail::remap_onto_levels(
       p, box, ml, builder, params, region, ws, grid,
       [&](const detail::CellGrid<D>& g, RemapStats&) -> detail::Sums<D>& {
         // remap_face_cells picks the old cells to build again by their reach
-        return detail::accumulate_overlaps(p, box, fine, builder, params, g, region, ws, ml.max_level > 0, false);
+        return detail::accumulate_overlaps(p, box, fine, builder, params, g, region, ws, ml.max_level > 0, false,
+                                           part.cells);
       },
-      [&](const auto&, const detail::Faces&, RemapStats&) -> detail::Sums<D>& { return ws.sums[0]; });
+      [&](const auto&, const detail::Faces&, RemapStats&) -> detail::Sums<D>& { return ws.sums[0]; }, part);
 }
 
 }  // namespace rsph::regularize

@@ -28,6 +28,9 @@ struct MultiLevel {
   static_assert(refine::check_criterion<Criterion, D>());
   static constexpr int dim = D;
   static constexpr int deepest_supported = 10;
+  /// Runs on many ranks: every rank lays out the whole set's grid and chooses the same levels from the field
+  /// summed over them (multilevel.hpp).
+  static constexpr bool remaps_on_ranks = true;
 
   double spacing;   ///< Delta_0, the coarsest level's spacing
   int max_level;    ///< the finest level L

@@ -123,7 +123,7 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
                           });
   } else {
     set_closing_radii(p, box, params, workspace.closing);
-    if (record_reach) workspace.reach.resize(n_old);
+    if (record_reach) workspace.reach.assign(n_old, -1.0);  // -1: not built (`only` leaves it out)
     AddToSums<D, E> add{&sums, &p, record_reach ? &workspace.reach : nullptr};
     for_each_old_cell(p, box, lattice, builder, grid, region, workspace, add, only);
   }

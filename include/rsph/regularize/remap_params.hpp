@@ -40,10 +40,20 @@ struct RemapParams {
 /// A remap of one rank's part of a decomposed set (mpi/decomposition.hpp): the old particles whose cells it
 /// builds (ascending; empty: every one), and the largest of a value over every rank (the heaviest new cell, which
 /// min_mass_ratio scales, must be the whole set's). Empty in one process: the whole set, nothing to reduce.
+/// A lattice that reads the whole set (a multi-level lattice's levels) also takes `owns` and `sum_over_ranks`.
 struct RankPart {
   std::span<const std::uint32_t> cells;
   std::function<double(double)> max_over_ranks;
+  /// Whether each point (D coordinates after another) is this rank's: its nearest old particle is, so a new
+  /// site there is kept here and the overlaps there are complete here. Every point is exactly one rank's.
+  std::function<std::vector<std::uint8_t>(std::span<const double>)> owns;
+  /// Element-wise sums over the ranks, in place (MPI's order; exact where one rank holds each value).
+  std::function<void(std::span<double>)> sum_over_ranks;
+
   double max(double v) const { return max_over_ranks ? max_over_ranks(v) : v; }
+  double min(double v) const { return max_over_ranks ? -max_over_ranks(-v) : v; }
+  /// Whether the remap is one rank's part of a decomposed set.
+  bool on_ranks() const { return static_cast<bool>(max_over_ranks); }
 };
 
 /// What a remap carries into one new cell: mass (eq. 6), momentum (eq. 8), total energy m (e + v^2/2) (eq. 9

@@ -18,7 +18,6 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
                               Builder& builder, const RemapParams& params, const SecondOrderParams& second,
                               const Region& region = {}, RemapWorkspace<D>* workspace = nullptr,
                               second_order::Workspace<D>* ws2 = nullptr, const RankPart& part = {}) {
-  require(part.cells.empty() && !part.max_over_ranks, "a multi-level lattice remaps in one process");
   ml.validate();
   second.validate();
   RemapWorkspace<D> local;
@@ -28,15 +27,17 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   const auto fine = ml.finest();
   detail::check_remap_input(p, fine, params);
   detail::check_whole_blocks(box, ml);
-  const auto grid = detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells);
+  const auto grid =
+      detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells, part);
   auto sums_on = [&](const detail::CellGrid<D>& g, RemapStats& stats) -> detail::Sums<D>& {
-    auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false);
+    auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false,
+                                              part.cells);
     if constexpr (D == 2) {  // the face hand-out builds again the old cells whose reach meets a face cell
       ws.reach.resize(p.n_real);
       for (std::size_t a = 0; a < p.n_real; ++a) {
         double r2 = 0.0;
         for (const auto& v : w2.cells.vertices_of(a)) r2 = std::max(r2, v.squaredNorm());
-        ws.reach[a] = std::sqrt(r2);
+        ws.reach[a] = w2.cells.built(a) ? std::sqrt(r2) : -1.0;  // -1: not built (another rank's part)
       }
     }
     return S;
@@ -51,7 +52,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
     }
     return ws.sums[0];
   };
-  return detail::remap_onto_levels(p, box, ml, builder, params, region, ws, grid, sums_on, at_faces);
+  return detail::remap_onto_levels(p, box, ml, builder, params, region, ws, grid, sums_on, at_faces, part);
 }
 
 }  // namespace rsph::regularize
