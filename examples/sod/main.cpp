@@ -92,7 +92,7 @@ int run(const Options& opt, Sim sim) {
 }
 
 /// Both methods run on the ranks of mpiexec where built with MPI (ex::with_ranks), RSPH's multi-level lattices
-/// too; consistent gradients run in one process.
+/// and consistent gradients too.
 template <int D, class Kernel>
 int run_method(const Options& opt) {
   if (opt.method == "sph")
@@ -106,11 +106,10 @@ int run_method(const Options& opt) {
           return run<D, Kernel>(opt, scenes::make_rsph_sod3<Kernel, Order>(opt.sod, opt.rsph, domain...));
         });
       } else {
-        if (opt.consistent_gradient) {
-          ex::in_one_process("rsph-sod --consistent-gradient");
-          return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, opt.gradient));
-        }
         return ex::with_ranks<D>([&](auto... domain) {
+          if (opt.consistent_gradient)
+            return run<D, Kernel>(opt,
+                                  scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, opt.gradient, domain...));
           return run<D, Kernel>(opt, scenes::make_rsph_sod<D, Kernel, Order>(opt.sod, opt.rsph, domain...));
         });
       }

@@ -90,14 +90,13 @@ int run(Options opt) {
   ex::Checkpoints checkpoints(common, dir, "rsph-strong-shock");
   const auto r = ex::with_kernel(kernel, [&](auto k) {
     using Kernel = decltype(k);
-    if (method == "rsph" && s.refinement.levels > 0) {
-      ex::in_one_process("rsph-strong-shock --levels (a multi-level lattice)");
-      return ex::with_remap(s.remap, [&](auto order) {
-        return scenes::run_shock(scenes::make_rsph_levels_shock<Kernel>(s, order), s, on_step, on_end, &checkpoints);
-      });
-    }
-    // the uniform lattice and plain SPH on the ranks of mpiexec where built with MPI (ex::with_ranks)
+    // every method on the ranks of mpiexec where built with MPI (ex::with_ranks)
     return ex::with_ranks<2>([&](auto... domain) {
+      if (method == "rsph" && s.refinement.levels > 0)
+        return ex::with_remap(s.remap, [&](auto order) {
+          return scenes::run_shock(scenes::make_rsph_levels_shock<Kernel>(s, order, domain...), s, on_step, on_end,
+                                   &checkpoints);
+        });
       if (method == "rsph")
         return ex::with_remap(s.remap, [&](auto order) {
           return scenes::run_shock(scenes::make_rsph_shock<Kernel>(s, order, domain...), s, on_step, on_end,

@@ -169,14 +169,16 @@ using ShockLevels = lattice::MultiLevel<2, refine::DensityJump>;
 template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
 using LevelShockRegularizer = regularize::LatticeRegularizer<ShockLevels, schedule::Adaptive<Kernel, 2>,
                                                              geometry::LocalVoronoi, region::Unbounded, Order>;
-template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
+template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline, class... Extra>
 using RsphLevelShock = Simulation<2, Kernel, eos::IdealGas, LevelShockRegularizer<Order, Kernel>,
-                                  physics::ArtificialViscosity, physics::ConsistentGradient>;
+                                  physics::ArtificialViscosity, physics::ConsistentGradient, Extra...>;
 
 /// The tube on the finest lattice, then one remap onto the level lattice: the membrane on the finest
 /// level, the uniform states on level 0; rho = m / V, as the continuity equation takes it.
-template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder>
-RsphLevelShock<Order, Kernel> make_rsph_levels_shock(const StrongShockParams& s, Order order = {}) {
+/// `extra`: a domain decomposition for many ranks (examples::with_ranks), or nothing.
+template <class Kernel = kernel::CubicSpline, class Order = regularize::FirstOrder, class... Extra>
+RsphLevelShock<Order, Kernel, Extra...> make_rsph_levels_shock(const StrongShockParams& s, Order order = {},
+                                                               Extra... extra) {
   s.validate();
   require(s.refinement.levels > 0, "strong shock: the level lattice needs --levels >= 1");
   const eos::IdealGas gas{s.gamma};
@@ -191,12 +193,12 @@ RsphLevelShock<Order, Kernel> make_rsph_levels_shock(const StrongShockParams& s,
   auto ml = examples::start_on_levels(p, box, dx, s.refinement, remap);
   TimeStepParams ts;
   ts.courant = s.courant;
-  return RsphLevelShock<Order, Kernel>(
+  return RsphLevelShock<Order, Kernel, Extra...>(
       std::move(p), box, gas,
       LevelShockRegularizer<Order, Kernel>(std::move(ml),
                                            schedule::Adaptive<Kernel, 2>{s.N_min, s.N_max, s.dN_max, s.max_steps},
                                            {.remap = remap, .order = order}),
-      ts, physics::ArtificialViscosity{s.alpha, s.beta}, physics::ConsistentGradient{});
+      ts, physics::ArtificialViscosity{s.alpha, s.beta}, physics::ConsistentGradient{}, std::move(extra)...);
 }
 
 template <class Kernel = kernel::CubicSpline, class... Extra>

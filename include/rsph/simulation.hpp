@@ -93,7 +93,6 @@ class Simulation {
   static_assert((int(DomainDecomposition<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one decomposition");
   static_assert(!distributed || regularize::remaps_on_ranks<Reg>(),
                 "this regularizer does not run on many ranks: its sites follow the whole gas (the rings lattice)");
-  static_assert(!distributed || !corrected, "consistent gradients do not run on many ranks yet");
 
   Simulation(Particles particles, Box<D> box, EOS eos, Reg reg, TimeStepParams params, Terms... terms)
       : p_(std::move(particles)),
@@ -228,7 +227,7 @@ class Simulation {
     ar("seconds_integrate", times_.integrate);
     ar("seconds_regularization", times_.regularization);
     if constexpr (requires { reg_.checkpoint(ar); }) reg_.checkpoint(ar);
-    if constexpr (corrected) cg_.checkpoint(ar);
+    if constexpr (corrected) cg_.checkpoint(ar, p_.n_real);
     if (!ar.saving() && params_.max_bin > 0) blocks_.evaluated_all(p_, time_);  // a block ends synchronised
     if constexpr (distributed)
       if (!ar.saving() && on_many_ranks()) {
@@ -256,7 +255,7 @@ class Simulation {
     else
       density_pass();
     auto t0 = clock::now();
-    if constexpr (corrected) cg_.template update<Kernel>(correction(), p_, box_, nl_);
+    if constexpr (corrected) cg_.template update<Kernel>(correction(), p_, box_, nl_, solve_on_ranks());
     if constexpr (has_stress) stress_pass();
     if (params_.max_bin > 0 || corrected)
       force_pass<true>(neighbors::FirstN{p_.n_real});
@@ -296,7 +295,29 @@ class Simulation {
       for (std::size_t a = 0; a < n; ++a) work_[a] += static_cast<double>(nl_.count(a));
     v_sig_.resize(n);
     drho_dt_.resize(n);
+    if constexpr (corrected) {  // psi goes along, the next solve's warm start as in one process
+      if (cg_.psi.size() >= n) {
+        cg_.psi.resize(n);
+        d.balance(p_, std::span<const double>(work_), v_sig_, drho_dt_, cg_.psi);
+        return;
+      }
+    }
     d.balance(p_, std::span<const double>(work_), v_sig_, drho_dt_);
+  }
+
+  /// What the consistent-gradient solve needs on many ranks (halo values, sums, gathers); empty in one process.
+  physics::SolveOnRanks solve_on_ranks() const {
+    if constexpr (distributed)
+      if (on_many_ranks()) {
+        const auto& d = domain();
+        return {[&d](std::vector<double>& f) { d.refresh_halos(f); },
+                [&d](double v) {
+                  d.sum_in_place(std::span<double>(&v, 1));
+                  return v;
+                },
+                [&d](const std::vector<double>& v) { return d.gather_all(v); }};
+      }
+    return {};
   }
 
   /// Whether a decomposition spreads the run over more than one rank (one rank runs the serial code).

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstddef>
+#include <functional>
 #include <vector>
 
 namespace rsph {
@@ -16,17 +17,18 @@ struct CgResult {
 
 /// Solves A x = b from the given x (a warm start) with the Jacobi preconditioner 1 / diagonal[i].
 /// `apply(x, y)` sets y = A x. A singular A is fine when b lies in its range (b orthogonal to its null
-/// space). Stops when |r| <= tolerance |b| or after max_iterations.
-template <class Apply>
+/// space). Stops when |r| <= tolerance |b| or after max_iterations. `total(s)` completes a dot product's partial
+/// sum: on many ranks, each holding some rows, the sum over them (the same on every rank, so all stop together).
+template <class Apply, class Total = std::identity>
 CgResult conjugate_gradient(Apply&& apply, const std::vector<double>& diagonal, const std::vector<double>& b,
-                            std::vector<double>& x, double tolerance, int max_iterations) {
+                            std::vector<double>& x, double tolerance, int max_iterations, Total&& total = {}) {
   const std::size_t n = b.size();
   x.resize(n, 0.0);
-  auto dot = [n](const std::vector<double>& u, const std::vector<double>& v) {
+  auto dot = [n, &total](const std::vector<double>& u, const std::vector<double>& v) {
     double s = 0.0;
 #pragma omp parallel for reduction(+ : s) schedule(static) if (n >= kParallelMin)
     for (std::size_t i = 0; i < n; ++i) s += u[i] * v[i];
-    return s;
+    return static_cast<double>(total(s));
   };
   CgResult out;
   const double b_norm = std::sqrt(dot(b, b));

@@ -318,6 +318,12 @@ class Decomposition {
     p.next_id += total - first - mine;
   }
 
+  /// Every rank's values, in rank order, on every rank (a few values per rank: a reduction keyed by name).
+  std::vector<double> gather_all(const std::vector<double>& mine) const {
+    if (ranks() == 1) return mine;
+    return comm_->exchange(std::vector<std::vector<double>>(static_cast<std::size_t>(ranks()), mine));
+  }
+
   /// Element-wise sums over the ranks (MPI's order: the last bits may depend on the rank count).
   void sum_in_place(std::span<double> values) const {
     if (ranks() > 1) comm_->sum_in_place(values);

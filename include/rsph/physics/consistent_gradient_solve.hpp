@@ -17,9 +17,21 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <functional>
+#include <limits>
+#include <map>
 #include <vector>
 
 namespace rsph::physics {
+
+/// What the solve needs on many ranks (mpi/decomposition.hpp), where the band spans them: the halos' values of a
+/// per-point field from their owners, sums over the ranks, and every rank's values. Empty in one process.
+struct SolveOnRanks {
+  std::function<void(std::vector<double>&)> refresh_halos;  ///< halo entries of a per-point field, from their owners
+  std::function<double(double)> sum;                        ///< over the ranks
+  std::function<std::vector<double>(const std::vector<double>&)> gather;  ///< every rank's values, in rank order
+  bool active() const { return static_cast<bool>(sum); }
+};
 
 /// The state of the consistent-gradient solve a simulation keeps between force passes.
 template <int D>
@@ -30,12 +42,18 @@ class ConsistentGradientWorkspace {
   CgResult last;                   ///< the last solve, summed over axes
   std::uint64_t solves = 0, iterations = 0;
 
-  /// Saves or restores what the next pass reads: psi (its warm start, or kept) and the band, and the counts.
+  /// Saves or restores what the next pass reads: psi of the n real particles (its warm start, or kept; none
+  /// after a remap) and their band, per particle, and the counts.
   template <class Archive>
-  void checkpoint(Archive& ar) {
+  void checkpoint(Archive& ar, std::size_t n) {
     const auto scope = ar.scope("consistent_gradient");
-    ar("psi", psi);
-    ar("band", band);
+    std::uint64_t solved = psi.size() >= n;
+    ar("solved", solved);
+    psi.resize(n);
+    band.resize(n);
+    ar.rows("psi", psi);
+    ar.rows("band", band);
+    if (!solved) psi.clear();
     ar("solves", solves);
     ar("iterations", iterations);
     ar("last_iterations", last.iterations);
@@ -47,26 +65,38 @@ class ConsistentGradientWorkspace {
   void reset() { psi.clear(); }
 
   /// psi and the band for the current neighbour lists: solved when fresh or term.every_step, else kept;
-  /// then mirrored onto the ghosts.
+  /// then mirrored onto the ghosts. `ranks`: on many ranks, the band and the solve span them (a halo is a ghost
+  /// that is its own source; its flags and psi come from its owner).
   template <class Kernel, class P>
-  void update(const ConsistentGradient& term, const P& p, const Box<D>& box, const neighbors::NeighborList& nl) {
+  void update(const ConsistentGradient& term, const P& p, const Box<D>& box, const neighbors::NeighborList& nl,
+              const SolveOnRanks& ranks = {}) {
     const std::size_t n = p.n_real;
     const bool fresh = psi.size() < n;
     if (fresh || term.every_step) {
-      find_band(term, p, nl);
+      find_band(term, p, nl, ranks);
       std::vector<Vec<D>> psi_old;
       if (!fresh) psi_old.assign(psi.begin(), psi.begin() + static_cast<std::ptrdiff_t>(n));
       psi.assign(p.size_with_ghosts(), Vec<D>::Zero());
       last = CgResult{};
       last.converged = true;
-      if (!members_.empty()) {
+      if (ranks.active() ? ranks.sum(static_cast<double>(members_.size())) > 0.0 : !members_.empty()) {
         pair_weights_and_rhs<Kernel>(p, box, nl);
-        const auto anchored = connected_pieces(n, nl, p.ghost_source);
+        const auto anchored = ranks.active() ? pieces_on_ranks(p, nl, ranks) : connected_pieces(n, nl, p.ghost_source);
         const auto diagonal = assemble(n, nl, p.ghost_source);
-        for (int axis = 0; axis < D; ++axis) solve_axis(term, axis, diagonal, anchored, fresh ? nullptr : &psi_old);
+        for (int axis = 0; axis < D; ++axis)
+          solve_axis(term, axis, diagonal, anchored, fresh ? nullptr : &psi_old, n, ranks);
       }
       ++solves;
       iterations += static_cast<std::uint64_t>(last.iterations);
+    }
+    if (ranks.active()) {
+      for (int axis = 0; axis < D; ++axis) {  // the halos' psi from their owners
+        std::vector<double> c(p.size_with_ghosts());
+        for (std::size_t a = 0; a < n; ++a) c[a] = psi[a][axis];
+        ranks.refresh_halos(c);
+        for (std::size_t g = n; g < c.size(); ++g)
+          if (is_halo(p.ghost_source, n, g)) psi[g][axis] = c[g];
+      }
     }
     mirror_onto_ghosts(p, box);
   }
@@ -78,19 +108,34 @@ class ConsistentGradientWorkspace {
   static std::size_t source_of(std::uint32_t b, std::size_t n, const std::vector<std::uint32_t>& ghost_source) {
     return b < n ? b : ghost_source[b - n];
   }
+  /// Whether ghost g is a halo of another rank's particle (its own source), not an image.
+  static bool is_halo(const std::vector<std::uint32_t>& ghost_source, std::size_t n, std::size_t g) {
+    return ghost_source[g - n] == g;
+  }
+  /// On many ranks: the halos' band flags from their owners.
+  static void refresh_flags(std::vector<std::uint8_t>& flags, std::size_t n, const SolveOnRanks& ranks) {
+    if (!ranks.active()) return;
+    std::vector<double> f(flags.begin(), flags.end());
+    ranks.refresh_halos(f);
+    for (std::size_t g = n; g < f.size(); ++g) flags[g] = f[g] != 0.0;
+  }
 
   /// The particles with a neighbour of another h, grown by term.band_layers neighbour layers, and each
   /// member's index in the band.
+  /// On many ranks the halos' flags follow each layer, and the band's halo members are numbered after this
+  /// rank's own (band_index_), as the columns they are in the matrix.
   template <class P>
-  void find_band(const ConsistentGradient& term, const P& p, const neighbors::NeighborList& nl) {
-    const std::size_t n = p.n_real;
-    band.assign(p.size_with_ghosts(), 0);
+  void find_band(const ConsistentGradient& term, const P& p, const neighbors::NeighborList& nl,
+                 const SolveOnRanks& ranks) {
+    const std::size_t n = p.n_real, n_all = p.size_with_ghosts();
+    band.assign(n_all, 0);
     for (std::size_t a = 0; a < n; ++a)
       for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k)
         if (std::abs(p.h[nl.index[k]] - p.h[a]) > 1e-12 * p.h[a]) {
           band[a] = 1;
           break;
         }
+    refresh_flags(band, n, ranks);
     for (int layer = 0; layer < term.band_layers; ++layer) {
       grow_.assign(band.begin(), band.begin() + static_cast<std::ptrdiff_t>(n));
       for (std::size_t a = 0; a < n; ++a) {
@@ -102,14 +147,22 @@ class ConsistentGradientWorkspace {
           }
       }
       std::copy(grow_.begin(), grow_.end(), band.begin());
+      refresh_flags(band, n, ranks);
     }
-    band_index_.assign(n, -1);
+    band_index_.assign(ranks.active() ? n_all : n, -1);
     members_.clear();
     for (std::size_t a = 0; a < n; ++a)
       if (band[a]) {
         band_index_[a] = static_cast<std::int32_t>(members_.size());
         members_.push_back(static_cast<std::uint32_t>(a));
       }
+    halo_members_.clear();
+    if (ranks.active())
+      for (std::size_t g = n; g < n_all; ++g)
+        if (band[g] && is_halo(p.ghost_source, n, g)) {
+          band_index_[g] = static_cast<std::int32_t>(members_.size() + halo_members_.size());
+          halo_members_.push_back(static_cast<std::uint32_t>(g));
+        }
   }
 
   /// Volumes, each ghost's mirrored axes, the pair weights w_ab = V_a V_b W_ab within the band, and the
@@ -173,6 +226,68 @@ class ConsistentGradientWorkspace {
     return anchored;
   }
 
+  /// connected_pieces over the ranks: each piece is named by the least identity among its members, found by
+  /// passing names across pairs and, between rounds, across the halos, until no rank changes one; whether a
+  /// mirror pair anchors it is gathered from every rank.
+  template <class P>
+  Anchors pieces_on_ranks(const P& p, const neighbors::NeighborList& nl, const SolveOnRanks& ranks) {
+    const std::size_t n = p.n_real, m = members_.size();
+    std::vector<double> name(p.size_with_ghosts(), std::numeric_limits<double>::infinity());
+    for (std::size_t a = 0; a < n; ++a)
+      if (band[a]) name[a] = static_cast<double>(p.id[a]);
+    for (bool changed = true; changed;) {
+      changed = false;
+      for (bool again = true; again;) {
+        again = false;
+        for (std::size_t i = 0; i < m; ++i) {
+          const std::uint32_t a = members_[i];
+          for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
+            if (pair_w_[k] == 0.0) continue;
+            const std::size_t b = source_of(nl.index[k], n, p.ghost_source);
+            const double least = std::min(name[a], name[b]);
+            if (name[a] != least || (b < n && name[b] != least)) {
+              name[a] = least;
+              if (b < n) name[b] = least;
+              again = changed = true;
+            }
+          }
+        }
+      }
+      ranks.refresh_halos(name);
+      changed = ranks.sum(changed ? 1.0 : 0.0) > 0.0;
+    }
+    // each piece's local number, and its anchors over all ranks: (name, anchored per axis) from every rank
+    std::map<double, std::int32_t> local;
+    piece_.assign(m, -1);
+    for (std::size_t i = 0; i < m; ++i)
+      piece_[i] = local.emplace(name[members_[i]], static_cast<std::int32_t>(local.size())).first->second;
+    std::vector<std::array<bool, D>> mine(local.size());
+    for (std::size_t i = 0; i < m; ++i) {
+      const std::uint32_t a = members_[i];
+      for (auto k = nl.offset[a]; k < nl.offset[a + 1]; ++k) {
+        const std::uint32_t b = nl.index[k];
+        if (pair_w_[k] == 0.0 || b < n) continue;
+        for (int ax = 0; ax < D; ++ax)
+          if (ghost_flips_[b - n] & (1u << ax))
+            mine[static_cast<std::size_t>(piece_[i])][static_cast<std::size_t>(ax)] = true;
+      }
+    }
+    std::vector<double> rows;
+    for (const auto& [nm, c] : local) {
+      rows.push_back(nm);
+      for (int ax = 0; ax < D; ++ax) rows.push_back(mine[static_cast<std::size_t>(c)][static_cast<std::size_t>(ax)]);
+    }
+    const auto all = ranks.gather(rows);
+    Anchors anchored(local.size());
+    for (std::size_t r = 0; r < all.size(); r += D + 1)
+      if (const auto it = local.find(all[r]); it != local.end())
+        for (int ax = 0; ax < D; ++ax)
+          anchored[static_cast<std::size_t>(it->second)][static_cast<std::size_t>(ax)] |= all[r + 1 + ax] != 0.0;
+    piece_names_.assign(local.size(), 0.0);
+    for (const auto& [nm, c] : local) piece_names_[static_cast<std::size_t>(c)] = nm;
+    return anchored;
+  }
+
   /// The band's matrix (CSR): row i holds, for each pair with a band member b that is not i's own mirror
   /// image, b's band index and per axis its weight times the sign of b's mirroring; the rest of each row
   /// lands on the diagonal, which is returned. Iterating on it instead of the neighbour list skips the pairs
@@ -209,19 +324,31 @@ class ConsistentGradientWorkspace {
 
   /// One axis: the right-hand side kept in the range of unanchored pieces, then conjugate gradients from
   /// the last psi (or zero).
+  /// On many ranks the product reads the halo members' values from their owners, and the pieces' means and the
+  /// solver's dot products are summed over the ranks.
   void solve_axis(const ConsistentGradient& term, int axis, const Diagonal& diagonal, const Anchors& anchored,
-                  const std::vector<Vec<D>>* psi_old) {
+                  const std::vector<Vec<D>>* psi_old, std::size_t n, const SolveOnRanks& ranks) {
     const std::size_t m = members_.size();
     const auto ax = static_cast<std::size_t>(axis);
     const auto& diag = diagonal[ax];
     const auto& coef = coef_[ax];
-    auto apply = [&](const std::vector<double>& in, std::vector<double>& out) {
+    std::vector<double> with_halos, field;
+    auto apply = [&](const std::vector<double>& own, std::vector<double>& out) {
+      const std::vector<double>* in = &own;
+      if (ranks.active()) {  // the halo members' entries after this rank's own
+        field.assign(band_index_.size(), 0.0);
+        for (std::size_t i = 0; i < m; ++i) field[members_[i]] = own[i];
+        ranks.refresh_halos(field);
+        with_halos.assign(own.begin(), own.end());
+        for (const auto g : halo_members_) with_halos.push_back(field[g]);
+        in = &with_halos;
+      }
       out.resize(m);
 #pragma omp parallel for schedule(static) if (m >= kParallelMin)
       for (std::size_t i = 0; i < m; ++i) {
         double off = 0.0;
-        for (std::size_t e = row_[i]; e < row_[i + 1]; ++e) off += coef[e] * in[col_[e]];
-        out[i] = diag[i] * in[i] - off;
+        for (std::size_t e = row_[i]; e < row_[i + 1]; ++e) off += coef[e] * (*in)[col_[e]];
+        out[i] = diag[i] * (*in)[i] - off;
       }
     };
     auto& rhs = rhs_[ax];
@@ -230,17 +357,35 @@ class ConsistentGradientWorkspace {
       mean[static_cast<std::size_t>(piece_[i])] += rhs[i];
       count[static_cast<std::size_t>(piece_[i])] += 1.0;
     }
+    if (ranks.active()) sum_pieces_over_ranks(mean, count, ranks);
     for (std::size_t i = 0; i < m; ++i) {
       const auto c = static_cast<std::size_t>(piece_[i]);
       if (!anchored[c][ax]) rhs[i] -= mean[c] / count[c];
     }
     std::vector<double> component(m);
     for (std::size_t i = 0; i < m; ++i) component[i] = psi_old ? (*psi_old)[members_[i]][axis] : 0.0;
-    const CgResult res = conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations);
+    (void)n;
+    const CgResult res =
+        ranks.active() ? conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations, ranks.sum)
+                       : conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations);
     last.iterations += res.iterations;
     last.relative_residual = std::max(last.relative_residual, res.relative_residual);
     last.converged = last.converged && res.converged;
     for (std::size_t i = 0; i < m; ++i) psi[members_[i]][axis] = component[i];
+  }
+
+  /// Each piece's sum and count over every rank (pieces named by piece_names_).
+  void sum_pieces_over_ranks(std::vector<double>& sum, std::vector<double>& count, const SolveOnRanks& ranks) const {
+    std::vector<double> rows;
+    for (std::size_t c = 0; c < sum.size(); ++c) rows.insert(rows.end(), {piece_names_[c], sum[c], count[c]});
+    const auto all = ranks.gather(rows);
+    std::map<double, std::pair<double, double>> total;
+    for (std::size_t r = 0; r < all.size(); r += 3) {
+      auto& t = total[all[r]];
+      t.first += all[r + 1];
+      t.second += all[r + 2];
+    }
+    for (std::size_t c = 0; c < sum.size(); ++c) std::tie(sum[c], count[c]) = total[piece_names_[c]];
   }
 
   /// Ghosts take their source's psi (its mirrored components flipped) and band membership.
@@ -264,6 +409,8 @@ class ConsistentGradientWorkspace {
   std::vector<std::uint32_t> col_;
   std::array<std::vector<double>, D> coef_;
   std::vector<std::uint32_t> members_;
+  std::vector<std::uint32_t> halo_members_;  ///< on many ranks: the band's halos, numbered after members_
+  std::vector<double> piece_names_;          ///< on many ranks: each piece's name (its least identity)
 };
 
 }  // namespace rsph::physics
