@@ -84,7 +84,7 @@ class ConsistentGradientWorkspace {
         const auto anchored = ranks.active() ? pieces_on_ranks(p, nl, ranks) : connected_pieces(n, nl, p.ghost_source);
         const auto diagonal = assemble(n, nl, p.ghost_source);
         for (int axis = 0; axis < D; ++axis)
-          solve_axis(term, axis, diagonal, anchored, fresh ? nullptr : &psi_old, n, ranks);
+          solve_axis(term, axis, diagonal, anchored, fresh ? nullptr : &psi_old, ranks);
       }
       ++solves;
       iterations += static_cast<std::uint64_t>(last.iterations);
@@ -327,7 +327,7 @@ class ConsistentGradientWorkspace {
   /// On many ranks the product reads the halo members' values from their owners, and the pieces' means and the
   /// solver's dot products are summed over the ranks.
   void solve_axis(const ConsistentGradient& term, int axis, const Diagonal& diagonal, const Anchors& anchored,
-                  const std::vector<Vec<D>>* psi_old, std::size_t n, const SolveOnRanks& ranks) {
+                  const std::vector<Vec<D>>* psi_old, const SolveOnRanks& ranks) {
     const std::size_t m = members_.size();
     const auto ax = static_cast<std::size_t>(axis);
     const auto& diag = diagonal[ax];
@@ -364,7 +364,6 @@ class ConsistentGradientWorkspace {
     }
     std::vector<double> component(m);
     for (std::size_t i = 0; i < m; ++i) component[i] = psi_old ? (*psi_old)[members_[i]][axis] : 0.0;
-    (void)n;
     const CgResult res =
         ranks.active() ? conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations, ranks.sum)
                        : conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations);

@@ -232,17 +232,21 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
   emit_particles(p, cells, keep, order, place, stats);
   stats.per_level.assign(static_cast<std::size_t>(ml.max_level) + 1, 0);
   std::vector<std::size_t> emitted;
-  std::vector<double> sites;
   for (std::size_t c = 0; c < n_cells; ++c)
-    if (keep[c] && cells.cell[c].m > 0.0) {
-      emitted.push_back(c);
+    if (keep[c] && cells.cell[c].m > 0.0) emitted.push_back(c);
+  if (part.on_ranks()) {  // only the sites this rank keeps (mpi::Decomposition::keep_owned_sites drops the others)
+    std::vector<double> sites;
+    for (const std::size_t c : emitted) {
       const Vec<D> x = fp.site(c);
       sites.insert(sites.end(), x.data(), x.data() + D);
     }
-  // on many ranks, the sites this rank keeps (mpi::Decomposition::keep_owned_sites drops the others)
-  const auto mine = part.on_ranks() ? part.owns(sites) : std::vector<std::uint8_t>(emitted.size(), 1);
-  for (std::size_t i = 0; i < emitted.size(); ++i)
-    if (mine[i]) ++stats.per_level[static_cast<std::size_t>(fp.level[emitted[i]])];
+    const auto mine = part.owns(sites);
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < emitted.size(); ++i)
+      if (mine[i]) emitted[kept++] = emitted[i];
+    emitted.resize(kept);
+  }
+  for (const std::size_t c : emitted) ++stats.per_level[static_cast<std::size_t>(fp.level[c])];
   std::map<std::array<std::int64_t, D>, int> levels;
   for (std::size_t b = 0; b < level.size(); ++b) levels[absolute_block(field, block0, b)] = level[b];
   ml.store_levels(std::move(levels));
