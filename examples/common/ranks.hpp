@@ -88,11 +88,6 @@ inline int rank_count() {
 }
 inline bool on_root() { return this_rank() == 0; }
 
-/// Refuses more than one rank for `what` (in words), which runs in one process as yet.
-inline void in_one_process(const std::string& what) {
-  require(rank_count() == 1, what + " runs in one process as yet: start it without mpiexec (or with -n 1)");
-}
-
 /// f(domain) with the decomposition of the ranks, or f() without MPI: a scene's make_ function takes the
 /// decomposition as its last term.
 template <int D, class F>

@@ -419,7 +419,7 @@ auto with_method_3d(const PlanetDiskParams& s, Run&& run) {
   });
 }
 
-/// Either method on the ranks of mpiexec where built with MPI, but on the rings lattice (in one process).
+/// Either method on the ranks of mpiexec where built with MPI.
 template <class Kernel, class Lattice, class EOS, class Run>
 auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& run) {
   auto on = [&](auto... domain) {
@@ -431,12 +431,7 @@ auto with_method(const PlanetDiskParams& s, const Lattice& lat, EOS eos, Run&& r
     auto sim = make_sph_disk<Kernel>(s, lat, eos, domain...);
     return run(sim);
   };
-  if constexpr (PerSiteLattice<Lattice>) {  // the rings lattice is refused on many ranks at compile time
-    examples::in_one_process("rsph-planet-disk's RSPH on the rings lattice");
-    return on();
-  } else {
-    return examples::with_ranks<2>(on);
-  }
+  return examples::with_ranks<2>(on);
 }
 
 /// with_method on the scene's lattice.

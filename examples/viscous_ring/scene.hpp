@@ -308,7 +308,7 @@ RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnSt
   using MG = physics::ShearViscosityMG<Kernel, 2>;
   using NS = physics::NavierStokesViscosity<2>;
   auto run = [&](auto sim) { return run_ring(sim, s, on_step, on_snapshot, checkpoints); };
-  // on the ranks of mpiexec where built with MPI, but on the rings lattice, whose sites follow the whole ring
+  // on the ranks of mpiexec where built with MPI
   auto on = [&](auto... domain) {
     if (s.viscosity == "ns") {
       if (s.cycle == 0) return run(make_sph_ring<NS, Kernel>(s, lat, domain...));
@@ -319,12 +319,7 @@ RingRun run_viscous_ring_on(const ViscousRingParams& s, const Lattice& lat, OnSt
     return examples::with_remap(s.remap,
                                 [&](auto order) { return run(make_rsph_ring<MG, Kernel>(s, lat, order, domain...)); });
   };
-  if constexpr (PerSiteLattice<Lattice>) {
-    examples::in_one_process("rsph-viscous-ring --lattice rings");
-    return on();
-  } else {
-    return examples::with_ranks<2>(on);
-  }
+  return examples::with_ranks<2>(on);
 }
 }  // namespace detail
 

@@ -92,7 +92,7 @@ class Simulation {
   static constexpr bool distributed = (DomainDecomposition<Terms, D> || ...);
   static_assert((int(DomainDecomposition<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one decomposition");
   static_assert(!distributed || regularize::remaps_on_ranks<Reg>(),
-                "this regularizer does not run on many ranks: its sites follow the whole gas (the rings lattice)");
+                "this regularizer does not run on many ranks: its lattice does not say `remaps_on_ranks`");
 
   Simulation(Particles particles, Box<D> box, EOS eos, Reg reg, TimeStepParams params, Terms... terms)
       : p_(std::move(particles)),
@@ -343,7 +343,7 @@ class Simulation {
     auto info = step_info();
     info.part = {cells, [&d](double v) { return d.max(v); },
                  [&owners](std::span<const double> sites) { return owners.owns(sites); },
-                 [&d](std::span<double> v) { d.sum_in_place(v); }};
+                 [&d](std::span<double> v) { d.sum_in_place(v); }, n_own};
     reg_.remap(p_, box_, info);
     d.keep_owned_sites(p_, owners);
     const auto after = totals();

@@ -134,6 +134,54 @@ TEST_CASE("rings lattice: the lookup by ring and angle names every cell an old c
   CHECK(overlapping > 3 * p.n_real);
 }
 
+TEST_CASE(
+    "rings lattice: a part of the gas (one rank's) gets the whole gas's rings, and the cells its old cells "
+    "meet, as the whole lattice has them",
+    "[regularize]") {
+  auto p = polar_gas(1, 10, 2.3, 0.45, 3);
+  const auto whole = sites_for(p);
+  // the old cells of the gas right of x = 0.3 are this part's; the sums and extremes over "the ranks" are its own
+  std::vector<std::uint32_t> mine;
+  for (std::size_t a = 0; a < p.n_real; ++a)
+    if (p.x[a].x() > 0.3) mine.push_back(static_cast<std::uint32_t>(a));
+  regularize::RankPart part;
+  part.cells = mine;
+  part.max_over_ranks = [](double v) { return v; };
+  part.sum_over_ranks = [](std::span<double>) {};
+  const double reach = disk_params.closing_radius_in_h * 1.4 * rings.spacing * 1.1;
+  const auto sites = rings.following(std::span<const Vec<2>>(p.x.data(), p.n_real),
+                                     std::span<const double>(p.m.data(), p.n_real), reach, part);
+  REQUIRE(sites.n_cells == whole.n_cells);
+  CHECK(sites.phase == whole.phase);
+  std::size_t built = 0;
+  for (std::size_t c = 0; c < sites.n_cells; ++c) built += sites.cell_start[c + 1] > sites.cell_start[c] ? 1 : 0;
+  CHECK(built < 3 * sites.n_cells / 4);  // the cells left of the part are not built
+  geometry::LocalVoronoi builder;
+  std::vector<double> closing(p.n_real, 0.75 * rings.spacing);
+  std::vector<std::vector<std::pair<std::size_t, double>>> pieces(p.n_real), pieces_whole(p.n_real);
+  struct Visit {
+    std::function<void(std::size_t, const geometry::ConvexPolygon&)> f;
+    void restart() {}
+    void operator()(int, std::size_t a, const geometry::ConvexPolygon& cell) { f(a, cell); }
+  } visit;
+  visit.f = [&](std::size_t a, const geometry::ConvexPolygon& cell) {
+    auto list = [&](const lattice::RingSites& s, auto& out) {
+      regularize::detail::for_each_site_piece(
+          s, cell, p.x[a], 1e-13 * geometry::area(cell),
+          [&](std::size_t c, const geometry::ConvexPolygon& piece) { out.emplace_back(c, geometry::area(piece)); });
+    };
+    list(sites, pieces[a]);
+    list(whole, pieces_whole[a]);
+  };
+  builder.build(p.x, open_box(), closing, visit);
+  std::size_t listed = 0;
+  for (const auto a : mine) {
+    CHECK(pieces[a] == pieces_whole[a]);  // the same cells, the same overlaps, bit for bit
+    listed += pieces[a].size();
+  }
+  CHECK(listed > 3 * mine.size());
+}
+
 TEST_CASE("rings lattice: gas on circular orbits returns to its sites with its own mass, momentum and energy",
           "[regularize]") {
   // The analogue of the drifting pulse's s = 0: after any time, each ring has turned by its own angle, and the

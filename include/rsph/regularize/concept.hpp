@@ -77,8 +77,9 @@ constexpr bool check_schedule() {
 
 namespace regularize {
 
-/// Whether regularizer R runs on many ranks (mpi/decomposition.hpp): one whose new lattice depends on the box
-/// alone, so that each rank can remap its part with its neighbours' particles (`remaps_on_ranks`).
+/// Whether regularizer R runs on many ranks (mpi/decomposition.hpp): one whose new lattice every rank can lay out
+/// alike (from the box, or from figures reduced over the ranks), so that each rank can remap its part with its
+/// neighbours' particles (`remaps_on_ranks`).
 template <class R>
 constexpr bool remaps_on_ranks() {
   if constexpr (requires { R::remaps_on_ranks; })

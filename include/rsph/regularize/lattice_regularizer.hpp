@@ -91,8 +91,8 @@ class LatticeRegularizer {
   /// The driver hands the schedule n_a of eq. (A1) from its density pass (StepInfo::number_density).
   static constexpr bool wants_number_density = requires { requires Schedule::wants_number_density; };
   /// One regular lattice fixed by the box runs on many ranks, and a lattice that says it does (the multi-level
-  /// lattice, whose levels every rank chooses alike from the whole set's field); the rings lattice, whose sites
-  /// follow the whole gas, does not yet.
+  /// lattice, whose levels every rank chooses alike from the whole set's field; the rings, whose phases are summed
+  /// over the ranks).
   static constexpr bool remaps_on_ranks =
       (RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice>) || requires {
     requires Lattice::remaps_on_ranks;

@@ -76,13 +76,20 @@ SiteCellVisitor<Sites, E, Region, Action> old_cell_visitor(const ParticleSet<2, 
 }
 
 /// The new cells of a per-site lattice for the particles `p`: its sites placed for them (a rings lattice
-/// follows their orbits) with the cells built out to where an old cell may reach.
+/// follows their orbits) with the cells built out to where an old cell may reach; on many ranks (`part`), the
+/// whole set's sites, with the cells this rank's old cells meet.
 template <class Lattice, bool E>
-auto site_cells(const ParticleSet<2, E>& p, const Box<2>& box, const Lattice& lattice, const RemapParams& params) {
+auto site_cells(const ParticleSet<2, E>& p, const Box<2>& box, const Lattice& lattice, const RemapParams& params,
+                const RankPart& part) {
   require(box.edge[0] == Edge::open && box.edge[1] == Edge::open,
           "regularization: a lattice of per-site cells (rings) needs a box open on both axes");
-  return lattice.following(std::span<const Vec<2>>(p.x.data(), p.n_real), std::span<const double>(p.m.data(), p.n_real),
-                           params.closing_radius_in_h * max_smoothing_length(p) * 1.1);
+  const std::span<const Vec<2>> x(p.x.data(), p.n_real);
+  const std::span<const double> m(p.m.data(), p.n_real);
+  const double reach = params.closing_radius_in_h * part.max(max_smoothing_length(p)) * 1.1;
+  if constexpr (requires { lattice.following(x, m, reach, part); })
+    return lattice.following(x, m, reach, part);
+  else
+    return lattice.following(x, m, reach);
 }
 
 }  // namespace rsph::regularize::detail

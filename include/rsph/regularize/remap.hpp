@@ -329,9 +329,10 @@ void emit_on_lattice(ParticleSet<2, E>& p, const Box<2>&, const Lattice& lattice
 /// The new cells a remap sums into: the candidate grid of a lattice of congruent cells, or the sites a
 /// per-site lattice places for the particles, with their cells.
 template <class Lattice, int D, bool E>
-auto new_cells(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params) {
+auto new_cells(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, const RemapParams& params,
+               const RankPart& part) {
   if constexpr (PerSiteLattice<Lattice>)
-    return site_cells(p, box, lattice, params);
+    return site_cells(p, box, lattice, params, part);
   else
     return candidate_grid(p, box, lattice, params);
 }
@@ -374,7 +375,7 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   detail::check_remap_input(p, lattice, params);
   RemapWorkspace<D> local;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
-  const auto grid = detail::new_cells(p, box, lattice, params);
+  const auto grid = detail::new_cells(p, box, lattice, params, part);
   auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws, false, true, part.cells);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <span>
 #include <string>
 #include <vector>
@@ -40,7 +41,8 @@ struct RemapParams {
 /// A remap of one rank's part of a decomposed set (mpi/decomposition.hpp): the old particles whose cells it
 /// builds (ascending; empty: every one), and the largest of a value over every rank (the heaviest new cell, which
 /// min_mass_ratio scales, must be the whole set's). Empty in one process: the whole set, nothing to reduce.
-/// A lattice that reads the whole set (a multi-level lattice's levels) also takes `owns` and `sum_over_ranks`.
+/// A lattice that reads the whole set (a multi-level lattice's levels, the rings' phases) also takes `owns`,
+/// `sum_over_ranks` and `own`.
 struct RankPart {
   std::span<const std::uint32_t> cells;
   std::function<double(double)> max_over_ranks;
@@ -49,6 +51,9 @@ struct RankPart {
   std::function<std::vector<std::uint8_t>(std::span<const double>)> owns;
   /// Element-wise sums over the ranks, in place (MPI's order; exact where one rank holds each value).
   std::function<void(std::span<double>)> sum_over_ranks;
+  /// How many of the local set's first particles are this rank's own (the others are other ranks' out to the
+  /// remap's reach): a sum over the whole set adds only these on each rank. Every one in one process.
+  std::size_t own = std::numeric_limits<std::size_t>::max();
 
   double max(double v) const { return max_over_ranks ? max_over_ranks(v) : v; }
   double min(double v) const { return max_over_ranks ? -max_over_ranks(-v) : v; }

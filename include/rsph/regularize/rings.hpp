@@ -9,6 +9,7 @@
 #include "rsph/core/errors.hpp"
 #include "rsph/core/parallel.hpp"
 #include "rsph/geometry/polygon.hpp"
+#include "rsph/regularize/remap_params.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -31,7 +32,7 @@ struct RingSites {
   std::vector<double> radius, phase;     ///< per ring: r_i, and the angle site 0 lies half a step past
   std::vector<std::size_t> offset{0};    ///< per ring and one past the last: its first site's number
   std::vector<Vec<2>> xy;                ///< every site (place() sets them from the phases)
-  std::vector<std::size_t> cell_start;   ///< per site and one past the last: its first vertex
+  std::vector<std::size_t> cell_start;   ///< per site and one past the last: its first vertex (none: not built)
   std::vector<Vec<2>> vertices;          ///< every cell's vertices, relative to its site, counter-clockwise
   std::vector<geometry::Bounds> bounds;  ///< every cell's bounding box, relative to its site
   /// Per ring: the least and largest distance of its cells from the origin, and the most any cell reaches
@@ -101,8 +102,10 @@ struct RingSites {
   /// reach meets p's, and on each the sites whose angular reach meets p's. A lookup by ring and angle.
   template <class F>
   void for_each_candidate(const geometry::ConvexPolygon& p, const Vec<2>& xo, F&& f) const;
-  /// Every site's Voronoi cell among the sites (see the definition below).
-  void build_cells(double edge_extent);
+  /// Every site's Voronoi cell among the sites (see the definition below), or, where `wanted` is not empty, the
+  /// cells of the sites it marks and of the innermost and outermost rings; the others have no vertices and
+  /// meet no box, so no lookup names them.
+  void build_cells(double edge_extent, const std::vector<std::uint8_t>& wanted = {});
 };
 
 namespace detail {
@@ -178,6 +181,35 @@ inline geometry::ConvexPolygon voronoi_cell(const RingSites& s, std::size_t c, s
       }
   return cell;
 }
+
+/// Whether each site lies within `w` of one of the points (and some a little farther): a grid of squares of
+/// side w over the points' bounds marks a site when the squares around its own hold a point.
+inline std::vector<std::uint8_t> sites_near(std::span<const Vec<2>> sites, std::span<const Vec<2>> points, double w) {
+  std::vector<std::uint8_t> near(sites.size(), 0);
+  if (points.empty()) return near;
+  Vec<2> lo = points[0], hi = points[0];
+  for (const auto& x : points) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  const auto nx = static_cast<std::int64_t>((hi.x() - lo.x()) / w) + 1;
+  const auto ny = static_cast<std::int64_t>((hi.y() - lo.y()) / w) + 1;
+  auto square = [&](const Vec<2>& x, int axis) {
+    return static_cast<std::int64_t>(std::floor((x[axis] - lo[axis]) / w));
+  };
+  std::vector<std::uint8_t> held(static_cast<std::size_t>(nx * ny), 0);
+  for (const auto& x : points)
+    held[static_cast<std::size_t>(std::min(square(x, 0), nx - 1) + nx * std::min(square(x, 1), ny - 1))] = 1;
+  run_parallel(sites.size(), [&](int, std::size_t begin, std::size_t end) {
+    for (std::size_t c = begin; c < end; ++c) {
+      const std::int64_t ix = square(sites[c], 0), iy = square(sites[c], 1);
+      for (std::int64_t j = std::max<std::int64_t>(iy - 1, 0); j <= std::min(iy + 1, ny - 1) && !near[c]; ++j)
+        for (std::int64_t i = std::max<std::int64_t>(ix - 1, 0); i <= std::min(ix + 1, nx - 1); ++i)
+          if (held[static_cast<std::size_t>(i + nx * j)]) {
+            near[c] = 1;
+            break;
+          }
+    }
+  });
+  return near;
+}
 }  // namespace detail
 
 /// Builds each cell by clipping a square of half-width 1.5 Delta (`edge_extent` on the innermost and outermost
@@ -186,7 +218,7 @@ inline geometry::ConvexPolygon voronoi_cell(const RingSites& s, std::size_t c, s
 /// 2 Delta; two along a ring beside: 1.5 steps along and Delta across; two rings away: 2 Delta), so it cannot
 /// cut a cell that reaches less than 0.9 Delta; a cell reaching further is built again among two rings and
 /// three sites each way, and refused if it still reaches beyond 1.2 Delta.
-inline void RingSites::build_cells(double edge_extent) {
+inline void RingSites::build_cells(double edge_extent, const std::vector<std::uint8_t>& wanted) {
   const std::size_t n_rings = rings();
   const auto n_threads = static_cast<std::size_t>(max_threads());
   std::vector<std::vector<Vec<2>>> verts(n_threads);  // per thread, its contiguous run of cells in order
@@ -198,6 +230,12 @@ inline void RingSites::build_cells(double edge_extent) {
     for (std::size_t c = begin; c < end; ++c) {
       const std::size_t k = ring_of(c);
       const bool edge = k == 0 || k + 1 == n_rings;
+      if (!edge && !wanted.empty() && !wanted[c]) {
+        cell_start[c + 1] = 0;
+        bounds[c] = {Vec<2>::Constant(std::numeric_limits<double>::infinity()),
+                     Vec<2>::Constant(-std::numeric_limits<double>::infinity())};
+        continue;
+      }
       const double half = edge ? std::max(edge_extent, 3.0 * spacing) : 1.5 * spacing;
       geometry::ConvexPolygon cell = detail::voronoi_cell(*this, c, k, half, 1, 1);
       if (!edge && geometry::max_radius(cell, Vec<2>::Zero()) >= 0.89 * spacing) {
@@ -219,6 +257,7 @@ inline void RingSites::build_cells(double edge_extent) {
   reach_hi.assign(n_rings, 0.0);
   reach_angle.assign(n_rings, 0.0);
   for (std::size_t c = 0; c < n_cells; ++c) {
+    if (cell_start[c + 1] == cell_start[c]) continue;  // not built
     const std::size_t k = ring_of(c);
     const auto e = detail::polar_extent(cell(c, Vec<2>::Zero()), Vec<2>::Zero(), xy[c]);
     reach_lo[k] = std::min(reach_lo[k], e.r_lo);
@@ -262,6 +301,9 @@ struct Rings {
   /// Every site owns a cell of its own (no shape moved from site to site): the remap asks the sites for their
   /// cells and candidates (RingSites) instead of an index range.
   static constexpr bool per_site_cells = true;
+  /// Runs on many ranks: every rank lays out the whole gas's rings, turned by phases summed over the ranks, and
+  /// builds the cells its old cells meet (`following`).
+  static constexpr bool remaps_on_ranks = true;
   double spacing = 0.0;
   double r_in = 0.0;                                       ///< the innermost ring's inner edge
   double r_out = std::numeric_limits<double>::infinity();  ///< the outermost ring's outer edge (infinite: none)
@@ -308,28 +350,52 @@ struct Rings {
   /// which is where the ring's sites have moved to modulo a site: Omega_i T for gas on circular orbits, with
   /// the integrator's phase error included); a ring without gas keeps phase 0. `reach`: how far an old cell
   /// may reach beyond its particle (the edge rings' cells take in everything that far out).
-  RingSites following(std::span<const Vec<2>> x, std::span<const double> m, double reach) const {
+  /// On many ranks (`part`) the rings and phases are the whole gas's, alike on every rank: the extent is reduced
+  /// over the ranks and each rank adds its own particles' phases. Only the cells that the old cells built here
+  /// (`part.cells`) may meet are built, and the edge rings'.
+  RingSites following(std::span<const Vec<2>> x, std::span<const double> m, double reach,
+                      const regularize::RankPart& part = {}) const {
     require(!x.empty(), "rings lattice: no gas to follow");
     double g_lo = std::numeric_limits<double>::max(), g_hi = 0.0;
     for (const auto& xa : x) {
       g_lo = std::min(g_lo, xa.norm());
       g_hi = std::max(g_hi, xa.norm());
     }
+    g_lo = part.min(g_lo);
+    g_hi = part.max(g_hi);
     RingSites s = sites(ring_at(g_lo), ring_at(g_hi));
-    std::vector<std::complex<double>> sum(s.rings(), 0.0);
+    turn_to_gas(s, x.first(std::min(part.own, x.size())), m, part);
+    s.place();
+    std::vector<std::uint8_t> wanted;
+    if (part.on_ranks()) {
+      std::vector<Vec<2>> near(part.cells.size());
+      for (std::size_t i = 0; i < near.size(); ++i) near[i] = x[part.cells[i]];
+      wanted = detail::sites_near(s.xy, near, reach + 1.5 * spacing);  // an inner cell reaches at most 1.2 Delta
+    }
+    const double beyond = std::max(0.0, s.radius.front() - g_lo) + std::max(0.0, g_hi - s.radius.back());
+    s.build_cells(beyond + reach + 3.0 * spacing, wanted);
+    return s;
+  }
+
+ private:
+  /// Sets each ring's phase from the gas in its band: the circular mean of N_i phi, mass-weighted, over the
+  /// particles x (masses m), summed over the ranks where `part` says so.
+  void turn_to_gas(RingSites& s, std::span<const Vec<2>> x, std::span<const double> m,
+                   const regularize::RankPart& part) const {
+    std::vector<double> sum(2 * s.rings(), 0.0);  // per ring: the real and imaginary parts
     for (std::size_t a = 0; a < x.size(); ++a) {
       const std::int64_t k = ring_at(x[a].norm()) - s.first_ring;
       if (k < 0 || k >= static_cast<std::int64_t>(s.rings())) continue;
       const auto kk = static_cast<std::size_t>(k);
-      sum[kk] += m[a] * std::polar(1.0, static_cast<double>(s.sites_on(kk)) * std::atan2(x[a].y(), x[a].x()));
+      const auto z = m[a] * std::polar(1.0, static_cast<double>(s.sites_on(kk)) * std::atan2(x[a].y(), x[a].x()));
+      sum[2 * kk] += z.real();
+      sum[2 * kk + 1] += z.imag();
     }
-    for (std::size_t k = 0; k < s.rings(); ++k)
-      if (std::abs(sum[k]) > 0.0)
-        s.phase[k] = (std::arg(sum[k]) - std::numbers::pi) / static_cast<double>(s.sites_on(k));
-    s.place();
-    const double beyond = std::max(0.0, s.radius.front() - g_lo) + std::max(0.0, g_hi - s.radius.back());
-    s.build_cells(beyond + reach + 3.0 * spacing);
-    return s;
+    if (part.sum_over_ranks) part.sum_over_ranks(sum);
+    for (std::size_t k = 0; k < s.rings(); ++k) {
+      const std::complex<double> z(sum[2 * k], sum[2 * k + 1]);
+      if (std::abs(z) > 0.0) s.phase[k] = (std::arg(z) - std::numbers::pi) / static_cast<double>(s.sites_on(k));
+    }
   }
 };
 

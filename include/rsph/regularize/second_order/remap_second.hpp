@@ -313,7 +313,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   second_order::Workspace<D> local2;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   second_order::Workspace<D>& w2 = ws2 ? *ws2 : local2;
-  const auto grid = detail::new_cells(p, box, lattice, params);
+  const auto grid = detail::new_cells(p, box, lattice, params, part);
   RemapStats stats;
   second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2, stats, true,
                                   part.cells);
