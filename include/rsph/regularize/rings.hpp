@@ -9,6 +9,7 @@
 #include "rsph/core/errors.hpp"
 #include "rsph/core/parallel.hpp"
 #include "rsph/geometry/polygon.hpp"
+#include "rsph/neighbors/cell_list.hpp"
 #include "rsph/regularize/remap_params.hpp"
 
 #include <algorithm>
@@ -182,31 +183,18 @@ inline geometry::ConvexPolygon voronoi_cell(const RingSites& s, std::size_t c, s
   return cell;
 }
 
-/// Whether each site lies within `w` of one of the points (and some a little farther): a grid of squares of
-/// side w over the points' bounds marks a site when the squares around its own hold a point.
-inline std::vector<std::uint8_t> sites_near(std::span<const Vec<2>> sites, std::span<const Vec<2>> points, double w) {
+/// Whether each site lies within `w` of one of the points.
+inline std::vector<std::uint8_t> sites_near(std::span<const Vec<2>> sites, const std::vector<Vec<2>>& points,
+                                            double w) {
   std::vector<std::uint8_t> near(sites.size(), 0);
   if (points.empty()) return near;
-  Vec<2> lo = points[0], hi = points[0];
-  for (const auto& x : points) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  const auto nx = static_cast<std::int64_t>((hi.x() - lo.x()) / w) + 1;
-  const auto ny = static_cast<std::int64_t>((hi.y() - lo.y()) / w) + 1;
-  auto square = [&](const Vec<2>& x, int axis) {
-    return static_cast<std::int64_t>(std::floor((x[axis] - lo[axis]) / w));
-  };
-  std::vector<std::uint8_t> held(static_cast<std::size_t>(nx * ny), 0);
-  for (const auto& x : points)
-    held[static_cast<std::size_t>(std::min(square(x, 0), nx - 1) + nx * std::min(square(x, 1), ny - 1))] = 1;
+  neighbors::CellList<2> lookup;
+  lookup.build(points, w);
   run_parallel(sites.size(), [&](int, std::size_t begin, std::size_t end) {
-    for (std::size_t c = begin; c < end; ++c) {
-      const std::int64_t ix = square(sites[c], 0), iy = square(sites[c], 1);
-      for (std::int64_t j = std::max<std::int64_t>(iy - 1, 0); j <= std::min(iy + 1, ny - 1) && !near[c]; ++j)
-        for (std::int64_t i = std::max<std::int64_t>(ix - 1, 0); i <= std::min(ix + 1, nx - 1); ++i)
-          if (held[static_cast<std::size_t>(i + nx * j)]) {
-            near[c] = 1;
-            break;
-          }
-    }
+    for (std::size_t c = begin; c < end; ++c)
+      lookup.for_each_within(sites[c], w, [&](std::uint32_t j) {
+        if ((points[j] - sites[c]).squaredNorm() <= w * w) near[c] = 1;
+      });
   });
   return near;
 }
