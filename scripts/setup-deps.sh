@@ -10,7 +10,7 @@ packages=(
   python3 python3-matplotlib python3-numpy python3-h5py python3-meshio
   clang-format
   voro++-dev
-  openmpi-bin libopenmpi-dev libtrilinos-zoltan-dev
+  openmpi-bin libopenmpi-dev libtrilinos-zoltan-dev libhdf5-openmpi-dev
 )
 
 missing=()

@@ -107,7 +107,7 @@ RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_st
 }
 
 /// A snapshot of `sim` at `path` with the positions of `objects` (io::write_snapshot); on many ranks every rank
-/// adds its own particles to rank 0's file in turn (mpi::FileTurns).
+/// writes its own particles into the one file, together through parallel HDF5 or in turns (mpi::FileTurns).
 template <class Sim>
 void write_snapshot(const std::filesystem::path& path, const Sim& sim, const std::string& units,
                     std::vector<std::pair<std::string, std::vector<double>>> objects = {}) {

@@ -442,8 +442,56 @@ TEST_CASE(
   compare_sod_on_levels<2, regularize::FirstOrder>("first-order", true, physics::ConsistentGradient{});
 }
 
+namespace {
+/// The ways the ranks write one file: in turns, and together where the HDF5 linked is parallel.
+std::vector<bool> writing_modes() {
+  if (mpi::parallel_hdf5) return {false, true};
+  return {false};
+}
+void check_checkpoint_on_ranks(bool together);
+}  // namespace
+
 TEST_CASE("Checkpoint on many ranks: one file in the serial layout, of which any rank count takes a share",
           "[mpi][checkpoint]") {
+  for (const bool together : writing_modes()) {
+    INFO((together ? "written together" : "written in turns"));
+    check_checkpoint_on_ranks(together);
+  }
+}
+
+TEST_CASE("Checkpoint on many ranks, written in turns and together: the same numbers in every field",
+          "[mpi][checkpoint]") {
+  const auto c = world();
+  if (!mpi::parallel_hdf5) return;  // the HDF5 linked is serial: in turns only
+  std::vector<double> x(static_cast<std::size_t>(3 * c.rank() + 1), 0.5 * c.rank());
+  std::string text = "rank " + std::to_string(c.rank());
+  std::vector<std::vector<double>> fields;
+  std::vector<std::string> texts;
+  for (const bool together : {false, true}) {
+    const auto file = std::filesystem::temp_directory_path() /
+                      ("rsph_mpi_modes_" + std::to_string(c.size()) + (together ? "_t" : "_i") + ".h5");
+    auto ar = io::Archive::for_saving();
+    ar.rows("x", x);
+    ar("text", text);
+    ar.write(file, mpi::FileTurns(c, together));
+    auto back = io::Archive::load(file);
+    std::vector<double> read;
+    std::string read_text;
+    back.rows("x", read);
+    back("text", read_text);
+    fields.push_back(read);
+    texts.push_back(read_text);
+    c.barrier();
+    if (c.rank() == 0) std::filesystem::remove(file);
+  }
+  CHECK(fields[0] == fields[1]);
+  CHECK(fields[0].size() == static_cast<std::size_t>(3 * c.size() * (c.size() - 1) / 2 + c.size()));
+  CHECK(texts[0] == "rank 0");  // the first rank's value of a field that is not per particle
+  CHECK(texts[1] == "rank 0");
+}
+
+namespace {
+void check_checkpoint_on_ranks(bool together) {
   const auto c = world();
   const auto P = static_cast<std::size_t>(c.size()), r = static_cast<std::size_t>(c.rank());
   const auto file = std::filesystem::temp_directory_path() / ("rsph_mpi_archive_" + std::to_string(P) + ".h5");
@@ -453,14 +501,16 @@ TEST_CASE("Checkpoint on many ranks: one file in the serial layout, of which any
     id.push_back(r * (r - 1) / 2 + 2 * r + k);
     x.push_back(Vec<2>(double(id.back()), -0.5 * double(id.back())));
   }
+  std::vector<double> odd(r == 1 ? 3 : 0, 2.5);  // rows on rank 1 only: the others write none
   double updates = double(r + 1), time = 0.25;
   {
     auto ar = io::Archive::for_saving();
     ar.rows("id", id);
     ar.rows("x", x);
+    ar.rows("odd", odd);
     ar.total("updates", updates);
     ar("time", time);
-    ar.write(file, mpi::FileTurns(c));
+    ar.write(file, mpi::FileTurns(c, together));
   }
   const std::size_t n = P * (P + 1) / 2 + P;  // every rank's rows
   for (const std::size_t parts : {std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(5)})
@@ -482,10 +532,15 @@ TEST_CASE("Checkpoint on many ranks: one file in the serial layout, of which any
       }
       CHECK(updates_read == (part == 0 ? double(P * (P + 1) / 2) : 0.0));
       CHECK(time_read == 0.25);
+      std::vector<double> odd_read;
+      ar.rows("odd", odd_read);
+      const std::size_t n_odd = P > 1 ? 3 : 0;
+      CHECK(odd_read == std::vector<double>(n_odd * (part + 1) / parts - n_odd * part / parts, 2.5));
     }
   c.barrier();
   if (r == 0) std::filesystem::remove(file);
 }
+}  // namespace
 
 TEST_CASE(
     "Checkpoint of a decomposed run: written on every rank and resumed in one process, written in one "
@@ -576,10 +631,13 @@ TEST_CASE("Snapshot on many ranks: one file in the serial layout, every rank's p
   s.n = 20;
   auto sim = sedov<SedovRanks<2>>(s, mpi::Decomposition<2>{});
   for (int i = 0; i < 5; ++i) sim.step();
-  const auto path = dir / io::snapshot_name(3);
-  io::write_snapshot(path, sim.particles(), sim.time(), sim.steps(), {}, mpi::FileTurns(sim.domain().comm()));
   const auto all = gather_by_id(sim.particles());  // id -> x, v, rho, h, P, u, dv/dt
-  if (c.rank() == 0) {
+  for (const bool together : writing_modes()) {
+    const auto path = dir / io::snapshot_name(together ? 4 : 3);
+    io::write_snapshot(path, sim.particles(), sim.time(), sim.steps(), {},
+                       mpi::FileTurns(sim.domain().comm(), together));
+    if (c.rank() != 0) continue;
+    INFO((together ? "written together" : "written in turns"));
     const auto x = read_dataset<double>(path, "x"), rho = read_dataset<double>(path, "rho"),
                u = read_dataset<double>(path, "u");
     const auto id = read_dataset<std::uint64_t>(path, "id"), index = read_dataset<std::uint64_t>(path, "index");
@@ -598,7 +656,7 @@ TEST_CASE("Snapshot on many ranks: one file in the serial layout, every rank's p
       seen.insert(id[k]);
     }
     CHECK(seen.size() == all.size());  // each particle once
-    CHECK(std::filesystem::is_regular_file(dir / "snap_00003.xmf"));
+    CHECK(std::filesystem::is_regular_file(path.parent_path() / (path.stem().string() + ".xmf")));
     CHECK(!std::filesystem::exists(io::temporary_sibling(path)));
   }
   c.barrier();

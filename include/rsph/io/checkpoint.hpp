@@ -173,34 +173,27 @@ class Archive {
     }
   }
 
-  /// Writes the collected fields to `path`, atomically.
-  void write(const std::filesystem::path& path) const {
-    const auto tmp = temporary_sibling(path);
-    if (!create(tmp, {})) {
-      std::filesystem::remove(tmp);
-      throw std::runtime_error("writing the checkpoint " + tmp.string() + " failed");
-    }
-    commit_file(tmp, path);
-  }
-
-  /// Writes the fields that several processes collected, each its own archive, to one file at `path`,
-  /// atomically: part 0 creates it with every field at its full length and writes its rows, the others then
-  /// write theirs in turn. Every process calls it; if one fails, all throw.
-  template <WritingTurns Turns>
-  void write(const std::filesystem::path& path, const Turns& turns) const {
-    std::vector<std::uint64_t> counts;
+  /// Writes the collected fields to `path`, atomically. Written by several processes (`turns`), each with its
+  /// own archive of the same fields, it is one file: part 0 creates it with every field at its full length and
+  /// writes its rows, the others then write theirs in turn, or all create it and write together. Every process
+  /// calls it; if one fails, all throw.
+  template <WritingTurns Turns = OneWriter>
+  void write(const std::filesystem::path& path, const Turns& turns = {}) const {
+    std::vector<std::uint64_t> counts, lengths;
     std::vector<double> reals;
     std::vector<std::int64_t> integers;
     for (const auto& [key, f] : fields_) {
       if (f.spread == Spread::rows) counts.push_back(length(f));
       if (f.spread == Spread::total && f.kind == 'd') reals.push_back(f.d.at(0));
       if (f.spread == Spread::total && f.kind == 'i') integers.push_back(f.i.at(0));
+      if (f.spread == Spread::first) lengths.push_back(turns.part() == 0 ? length(f) : 0);
     }
-    const Layout layout{turns.first_rows(counts), turns.total_rows(counts), turns.sum(reals), turns.sum(integers)};
+    const Layout layout{turns.first_rows(counts), turns.total_rows(counts), turns.total_rows(lengths), turns.sum(reals),
+                        turns.sum(integers)};
     const auto tmp = temporary_sibling(path);
     write_in_turns(
-        turns, tmp, [&] { return create(tmp, layout); }, [&] { return add_rows(tmp, layout); },
-        [&] { return committed(tmp, path); }, "writing the checkpoint " + tmp.string() + " on many processes failed");
+        turns, tmp, [&] { return create(tmp, layout, turns); }, [&] { return add_rows(tmp, layout); },
+        [&] { return committed(tmp, path); }, "writing the checkpoint " + tmp.string() + " failed");
   }
 
  private:
@@ -213,9 +206,10 @@ class Archive {
     std::string b;
     Spread spread = Spread::first;
   };
-  /// Where each process's rows go (per `rows` field, in key order) and the totals' sums (in key order).
+  /// Where each process's rows go and how many there are (per `rows` field, in key order), the length of part
+  /// 0's value of every other field, and the totals' sums (in key order).
   struct Layout {
-    std::vector<std::uint64_t> first, total;
+    std::vector<std::uint64_t> first, total, lengths;
     std::vector<double> reals;
     std::vector<std::int64_t> integers;
   };
@@ -257,38 +251,36 @@ class Archive {
   }
   static hsize_t length(const Field& f) { return f.kind == 'd' ? f.d.size() : f.kind == 'b' ? f.b.size() : f.i.size(); }
 
-  /// Writes `n` numbers of f at `first` of dataset `set` (a hyperslab of it unless it is the whole).
-  static bool write_at(hid_t set, const Field& f, hsize_t first, hsize_t n, const void* values) {
-    if (n == 0) return true;
-    const hid_t whole = H5Dget_space(set), memory = H5Screate_simple(1, &n, nullptr);
-    bool ok = H5Sselect_hyperslab(whole, H5S_SELECT_SET, &first, nullptr, &n, nullptr) >= 0;
-    ok = ok && H5Dwrite(set, memory_type(f), memory, whole, H5P_DEFAULT, values) >= 0;
-    H5Sclose(memory);
-    H5Sclose(whole);
-    return ok;
-  }
-
-  /// Creates the file `tmp` with every field (one process: as collected; many: `layout`'s lengths and sums)
-  /// and writes this process's values into it.
-  bool create(const std::filesystem::path& tmp, const Layout& layout) const {
+  /// Creates the file `tmp` with every field at `layout`'s lengths and sums, through `turns`' access and transfer
+  /// lists, and writes this process's values into it: its rows, and on part 0 every other field. Every field is
+  /// visited whatever failed, so that processes writing together make the same calls.
+  template <WritingTurns Turns>
+  bool create(const std::filesystem::path& tmp, const Layout& layout, const Turns& turns) const {
     const detail::QuietHdf5 quiet;
-    const hid_t file = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hid_t file = H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, turns.file_access());
     if (file < 0) return false;
     const hid_t groups = H5Pcreate(H5P_LINK_CREATE);
     H5Pset_create_intermediate_group(groups, 1);
-    const bool many = !layout.total.empty() || !layout.reals.empty() || !layout.integers.empty();
-    std::size_t row = 0, real = 0, integer = 0;
+    const bool first_part = turns.part() == 0;
+    std::size_t row = 0, other = 0, real = 0, integer = 0;
     bool ok = true;
     for (const auto& [key, f] : fields_) {
-      hsize_t n = length(f);
+      hsize_t n = 1, at = 0, mine = first_part ? 1 : 0;  // a total: part 0 writes the sum
       const void* values = data(f);
-      if (f.spread == Spread::rows && many) n = layout.total.at(row++);
-      if (f.spread == Spread::total && many)
+      if (f.spread == Spread::rows) {
+        n = layout.total.at(row);
+        at = layout.first.at(row++);
+        mine = length(f);
+      } else if (f.spread == Spread::first) {
+        n = layout.lengths.at(other++);
+        mine = first_part ? n : 0;
+      } else {
         values = f.kind == 'd' ? static_cast<const void*>(&layout.reals.at(real++))
                                : static_cast<const void*>(&layout.integers.at(integer++));
+      }
       const hid_t space = H5Screate_simple(1, &n, nullptr);
       const hid_t set = H5Dcreate2(file, key.c_str(), file_type(f), space, groups, H5P_DEFAULT, H5P_DEFAULT);
-      ok = ok && set >= 0 && write_at(set, f, 0, f.spread == Spread::rows ? length(f) : n, values);
+      ok = set >= 0 && write_slab(set, memory_type(f), at, mine, 0, values, turns.transfer()) && ok;
       if (set >= 0) H5Dclose(set);
       H5Sclose(space);
     }
@@ -316,7 +308,8 @@ class Archive {
     for (const auto& [key, f] : fields_) {
       if (f.spread != Spread::rows) continue;
       const hid_t set = H5Dopen2(file, key.c_str(), H5P_DEFAULT);
-      ok = ok && set >= 0 && write_at(set, f, layout.first.at(row++), length(f), data(f));
+      ok =
+          ok && set >= 0 && write_slab(set, memory_type(f), layout.first.at(row++), length(f), 0, data(f), H5P_DEFAULT);
       if (set >= 0) H5Dclose(set);
     }
     return H5Fclose(file) >= 0 && ok;

@@ -2,7 +2,8 @@
 // HDF5 snapshots: one dataset per field (x and v shaped N x dim), attributes `time`, `step` and `dim`; each
 // with an XDMF description beside it (xdmf.hpp), so that ParaView, VisIt and meshio open it directly. Several
 // processes (the ranks of a decomposed run, mpi::FileTurns) write one file in the same layout, each its own rows:
-// the first creates every dataset at its full length, the others add theirs in turn.
+// the first creates every dataset at its full length and the others add theirs in turn, or, with parallel HDF5,
+// all create it together and write their rows in one collective call per dataset.
 #include "rsph/core/particle_set.hpp"
 #include "rsph/io/atomic_file.hpp"
 #include "rsph/io/writing_turns.hpp"
@@ -24,8 +25,9 @@ namespace rsph::io {
 namespace detail {
 class H5File {
  public:
-  explicit H5File(const std::filesystem::path& path) {
-    id_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  /// Creates the file `path` with file access list `access` (the default, or MPI-IO's for many processes).
+  explicit H5File(const std::filesystem::path& path, hid_t access = H5P_DEFAULT) {
+    id_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
     if (id_ < 0) throw std::runtime_error("cannot create HDF5 file " + path.string());
   }
   ~H5File() {
@@ -55,32 +57,31 @@ struct Column {
   hsize_t rows() const { return (integer ? u.size() : d.size()) / std::max<hsize_t>(cols, 1); }
 };
 
-/// Writes each column's rows from row `first` of its dataset in `file`; with `total` (not on a later turn), the
-/// dataset is created first with that many rows.
-inline bool write_rows(hid_t file, const std::vector<Column>& columns, hsize_t first, std::optional<hsize_t> total) {
+/// Writes each column's rows from row `first` of its dataset in `file` with transfer list `transfer`; with
+/// `total` (not on a later turn), the dataset is created first with that many rows. Every column is visited
+/// whatever failed, so that processes writing together make the same calls.
+inline bool write_rows(hid_t file, const std::vector<Column>& columns, hsize_t first, std::optional<hsize_t> total,
+                       hid_t transfer = H5P_DEFAULT) {
   bool ok = true;
   for (const auto& c : columns) {
-    const int rank = c.cols == 0 ? 1 : 2;
     hid_t set = -1;
     if (total) {
       const hsize_t dims[2] = {*total, c.cols};
-      const hid_t space = H5Screate_simple(rank, dims, nullptr);
+      const hid_t space = H5Screate_simple(c.cols == 0 ? 1 : 2, dims, nullptr);
       set = H5Dcreate2(file, c.name.c_str(), c.integer ? H5T_STD_U64LE : H5T_IEEE_F64LE, space, H5P_DEFAULT,
                        H5P_DEFAULT, H5P_DEFAULT);
       H5Sclose(space);
     } else {
       set = H5Dopen2(file, c.name.c_str(), H5P_DEFAULT);
     }
-    if (set < 0) return false;
-    if (const hsize_t n = c.rows(); n > 0) {
-      const hsize_t start[2] = {first, 0}, count[2] = {n, c.cols};
-      const hid_t whole = H5Dget_space(set), memory = H5Screate_simple(rank, count, nullptr);
-      const void* values = c.integer ? static_cast<const void*>(c.u.data()) : static_cast<const void*>(c.d.data());
-      ok = ok && H5Sselect_hyperslab(whole, H5S_SELECT_SET, start, nullptr, count, nullptr) >= 0 &&
-           H5Dwrite(set, c.integer ? H5T_NATIVE_UINT64 : H5T_NATIVE_DOUBLE, memory, whole, H5P_DEFAULT, values) >= 0;
-      H5Sclose(memory);
-      H5Sclose(whole);
+    if (set < 0) {
+      ok = false;
+      continue;
     }
+    const void* values = c.integer ? static_cast<const void*>(c.u.data()) : static_cast<const void*>(c.d.data());
+    ok =
+        write_slab(set, c.integer ? H5T_NATIVE_UINT64 : H5T_NATIVE_DOUBLE, first, c.rows(), c.cols, values, transfer) &&
+        ok;
     ok = H5Dclose(set) >= 0 && ok;
   }
   return ok;
@@ -201,13 +202,13 @@ std::vector<Column> snapshot_columns(const ParticleSet<D, E>& p, std::uint64_t f
 }
 
 /// Creates the snapshot file `tmp` with every column at `total` rows, writes this process's rows at `first` and
-/// the attributes; false where that failed.
-template <int D>
+/// the attributes, through `turns`' access and transfer lists; false where that failed.
+template <int D, WritingTurns Turns>
 bool create_snapshot(const std::filesystem::path& tmp, const std::vector<Column>& columns, hsize_t first, hsize_t total,
-                     double time, std::uint64_t step, const SnapshotInfo& info) {
+                     double time, std::uint64_t step, const SnapshotInfo& info, const Turns& turns) {
   try {
-    H5File file(tmp);
-    const bool ok = write_rows(file.id(), columns, first, total);
+    H5File file(tmp, turns.file_access());
+    const bool ok = write_rows(file.id(), columns, first, total, turns.transfer());
     write_attribute(file.id(), "time", time, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE);
     write_attribute(file.id(), "step", step, H5T_NATIVE_UINT64, H5T_STD_U64LE);
     write_attribute(file.id(), "dim", static_cast<std::uint64_t>(D), H5T_NATIVE_UINT64, H5T_STD_U64LE);
@@ -233,8 +234,9 @@ inline bool add_snapshot_rows(const std::filesystem::path& tmp, const std::vecto
 /// xyz (N x 3, the positions on the x axis, for viewers that need two or three); attributes time, step and dim,
 /// and what `info` gives: box_lo, box_hi, periodic and edges, eos and its constants eos_NAME, units, and each
 /// body's position object_NAME. Then snap_NNNNN.xmf beside it and the folder's snapshots.xmf.
-/// Written by several processes (`turns`; every one calls it with the same path), the file holds every process's
-/// particles in process order, and each process only its own in memory; if one fails, all throw.
+/// Written by several processes (`turns`; every one calls it with the same path, time, step and info), the file
+/// holds every process's particles in process order, and each process only its own in memory; if one fails, all
+/// throw.
 template <int D, bool E, WritingTurns Turns = OneWriter>
 void write_snapshot(const std::filesystem::path& path, const ParticleSet<D, E>& p, double time, std::uint64_t step,
                     const SnapshotInfo& info = {}, const Turns& turns = {}) {
@@ -253,7 +255,7 @@ void write_snapshot(const std::filesystem::path& path, const ParticleSet<D, E>& 
     }
   };
   write_in_turns(
-      turns, tmp, [&] { return detail::create_snapshot<D>(tmp, columns, first, total, time, step, info); },
+      turns, tmp, [&] { return detail::create_snapshot<D>(tmp, columns, first, total, time, step, info, turns); },
       [&] { return detail::add_snapshot_rows(tmp, columns, first); }, commit,
       "writing the snapshot " + path.string() + " failed");
 }

@@ -1,7 +1,11 @@
 #pragma once
 // The ranks of a communicator writing one file together, a checkpoint or a snapshot (io::WritingTurns): the
-// offsets of their rows, the sums of their totals, and their turns at the file, one rank after another, so that
-// the file stays in the serial layout with the serial HDF5 library and each rank holds only its own particles.
+// offsets of their rows, the sums of their totals, and how they reach the file, so that it stays in the serial
+// layout and each rank holds only its own particles.
+// - Together (with parallel HDF5, the default where the HDF5 linked is parallel): every rank creates the file
+//   through MPI-IO and writes its rows into each dataset in one collective call.
+// - In turns (with the serial HDF5 library): rank 0 creates the file, the others add their rows one after
+//   another.
 // Link rsph::mpi and rsph::io.
 #include "rsph/io/writing_turns.hpp"
 #include "rsph/mpi/comm.hpp"
@@ -13,9 +17,35 @@
 
 namespace rsph::mpi {
 
+/// Whether the HDF5 linked can write one file from many ranks at once (parallel HDF5).
+inline constexpr bool parallel_hdf5 =
+#ifdef H5_HAVE_PARALLEL
+    true;
+#else
+    false;
+#endif
+
 class FileTurns {
  public:
-  explicit FileTurns(const Comm& comm) : comm_(comm) {}
+  /// The ranks of `comm`, writing together where `together` (and the HDF5 linked is parallel), else in turns.
+  explicit FileTurns(const Comm& comm, bool together = parallel_hdf5) : comm_(comm) {
+    if (!together) return;
+#ifdef H5_HAVE_PARALLEL
+    access_ = H5Pcreate(H5P_FILE_ACCESS);
+    transfer_ = H5Pcreate(H5P_DATASET_XFER);
+    if (access_ < 0 || transfer_ < 0 || H5Pset_fapl_mpio(access_, comm.get(), MPI_INFO_NULL) < 0 ||
+        H5Pset_dxpl_mpio(transfer_, H5FD_MPIO_COLLECTIVE) < 0)
+      throw NumericalError("parallel HDF5: cannot set up MPI-IO for writing together");
+#else
+    throw InputError("writing one file together needs parallel HDF5, and the HDF5 linked is serial");
+#endif
+  }
+  ~FileTurns() {
+    if (access_ != H5P_DEFAULT) H5Pclose(access_);
+    if (transfer_ != H5P_DEFAULT) H5Pclose(transfer_);
+  }
+  FileTurns(const FileTurns&) = delete;
+  FileTurns& operator=(const FileTurns&) = delete;
 
   std::size_t part() const { return static_cast<std::size_t>(comm_.rank()); }
 
@@ -41,7 +71,7 @@ class FileTurns {
   }
   bool all(bool ok) const { return comm_.all(ok); }
 
-  /// write() on every rank after the first, one after another.
+  /// write() on every rank after the first, one after another (in turns).
   template <class Write>
   void in_turn(Write&& write) const {
     for (int r = 1; r < comm_.size(); ++r) {
@@ -50,8 +80,13 @@ class FileTurns {
     }
   }
 
+  bool together() const { return access_ != H5P_DEFAULT; }
+  hid_t file_access() const { return access_; }
+  hid_t transfer() const { return transfer_; }
+
  private:
   const Comm& comm_;
+  hid_t access_ = H5P_DEFAULT, transfer_ = H5P_DEFAULT;
 };
 
 static_assert(io::WritingTurns<FileTurns>);
