@@ -2,12 +2,16 @@
 // The programs on many ranks. Built with MPI (RSPH_WITH_MPI, where CMake finds MPI and Zoltan), a program starts
 // and ends MPI itself (the library never does) and runs its scene's simulation with a domain decomposition
 // (mpi/decomposition.hpp) on every rank count, one rank being the serial run bit for bit. Every rank computes
-// the same figures (reductions); rank 0 writes the run's folder, to whose snapshots every rank adds its own
-// particles in turn, while the other ranks write their copies of the small files to a private temporary folder,
+// the same figures (reductions); rank 0 writes the run's folder, into whose snapshots every rank writes its own
+// particles, while the other ranks write their copies of the small files to a private temporary folder,
 // removed at the end (prepare_output), and print nothing. Built without MPI, nothing here does anything.
+#include "rsph/analysis/interpolate.hpp"
 #include "rsph/core/errors.hpp"
 
 #include <unistd.h>
+
+#include <algorithm>
+#include <vector>
 
 #include <cstdint>
 #include <cstdlib>
@@ -103,6 +107,30 @@ decltype(auto) with_ranks(F&& f) {
 template <class Sim, class Span>
 void sum_over_ranks(const Sim& sim, Span&& values) {
   if constexpr (Sim::distributed) sim.domain().sum_in_place(std::span<double>(values));
+}
+
+/// Element-wise least (`least`) or largest values over the ranks when `sim` is decomposed (a few values: every
+/// rank's are gathered).
+template <class Sim>
+void extreme_over_ranks(const Sim& sim, std::vector<double>& values, bool least) {
+  if constexpr (Sim::distributed) {
+    const auto all = sim.domain().gather_all(values);
+    for (std::size_t k = 0; k < values.size(); ++k)
+      for (std::size_t at = k; at < all.size(); at += values.size())
+        values[k] = least ? std::min(values[k], all[at]) : std::max(values[k], all[at]);
+  }
+}
+
+/// Sigma(points) = sum_b m_b W(|x - x_b|, h_b) over the whole gas (analysis::interpolate_density, an open box),
+/// from each rank's own particles `own`: a sum over particles, so each rank adds its own share at every point and
+/// the shares are summed over the ranks, and no rank needs another's particles. `own` must outlive the function.
+template <class Kernel, class Sim, class P>
+auto density_over_ranks(const Sim& sim, const P& own) {
+  return [&sim, &own](const std::vector<Vec<2>>& points) {
+    auto sigma = analysis::interpolate_density<Kernel>(own, points);
+    sum_over_ranks(sim, sigma);
+    return sigma;
+  };
 }
 
 /// A count summed over the ranks when `sim` is decomposed.

@@ -28,13 +28,13 @@ struct WakeFit {
 };
 
 /// The final state as the paper's figures show it, written as CSV; the wake's offset from linear theory.
-template <class P>
-WakeFit write_maps(const std::filesystem::path& dir, const P& p, const scenes::PlanetDiskParams& s, double time,
+/// `sigma_at` gives Sigma at a list of points (the SPH sum over the whole gas).
+template <class SigmaAt>
+WakeFit write_maps(const std::filesystem::path& dir, SigmaAt&& sigma_at, const scenes::PlanetDiskParams& s, double time,
                    std::size_t n_r, std::size_t n_phi) {
-  using K = kernel::CubicSpline;
   const double phi_p = s.star_planet().planet_phase(time);
   const paper::PolarGrid grid{s.r_in, s.r_out, phi_p, n_r, n_phi};
-  const auto sigma = analysis::interpolate_density<K>(p, grid.points());
+  const auto sigma = sigma_at(grid.points());
   io::CsvWriter map(dir / "map.csv", {"r", "phi", "sigma_over_sigma0"});
   for (std::size_t i = 0; i < n_r; ++i)
     for (std::size_t j = 0; j < n_phi; ++j) map.row({grid.r(i), grid.phi(j), sigma[i * n_phi + j] / s.sigma0});
@@ -51,8 +51,8 @@ WakeFit write_maps(const std::filesystem::path& dir, const P& p, const scenes::P
     const double phi = phi_p - std::numbers::pi + (static_cast<double>(j) + 0.5) * std::numbers::pi / double(n_phi);
     azimuthal.emplace_back(std::cos(phi), std::sin(phi));
   }
-  const auto along_r = analysis::interpolate_density<K>(p, radial);
-  const auto along_phi = analysis::interpolate_density<K>(p, azimuthal);
+  const auto along_r = sigma_at(radial);
+  const auto along_phi = sigma_at(azimuthal);
   io::CsvWriter cut_r(dir / "cut_phi_pi.csv", {"r", "sigma_over_sigma0"});
   for (std::size_t i = 0; i < n_cut; ++i) cut_r.row({radial[i].norm(), along_r[i] / s.sigma0});
   cut_r.close();
@@ -63,7 +63,7 @@ WakeFit write_maps(const std::filesystem::path& dir, const P& p, const scenes::P
   cut_phi.close();
 
   // Fig. 15: the azimuthal average; the wake of linear theory for the map.
-  const auto profile = scenes::disk_profile(p, s);
+  const auto profile = scenes::disk_profile_from(sigma_at, s);
   io::CsvWriter prof(dir / "profile.csv", {"r", "sigma_over_sigma0"});
   for (std::size_t k = 0; k < profile.r.size(); ++k) prof.row({profile.r[k], profile.sigma[k]});
   prof.close();
@@ -232,7 +232,8 @@ int run(Options opt) {
     if constexpr (std::decay_t<decltype(sim)>::dim == 3) {
       // between the zones: the disk whose gas moves freely
       const double thickness =
-          scenes::thickness_ratio(ex::particles_everywhere(sim), s.vertical(), s.zones().inner, s.zones().outer);
+          scenes::thickness_ratio(sim.particles(), s.vertical(), s.zones().inner, s.zones().outer,
+                                  [&](std::vector<double>& sums) { ex::sum_over_ranks(sim, sums); });
       if (d.steps == 0) thickness_initial = thickness;
       thickness_final = thickness;
     }
@@ -244,8 +245,10 @@ int run(Options opt) {
                          {{"star", {star.x(), star.y()}}, {"planet", {planet.x(), planet.y()}}});
       next_snapshot += snapshot_every;
     }
-    if (last)
-      wake = write_maps(dir, scenes::seen_from_above(ex::particles_everywhere(sim)), s, sim.time(), map_nr, map_nphi);
+    if (last) {  // every rank's own particles, their sums added over the ranks
+      const auto& own = scenes::seen_from_above(sim.particles());
+      wake = write_maps(dir, ex::density_over_ranks<kernel::CubicSpline>(sim, own), s, sim.time(), map_nr, map_nphi);
+    }
   };
   ex::Checkpoints checkpoints(common, dir, "rsph-planet-disk", period);
   const auto part = checkpoints.add("program", [&](io::Archive& ar) {

@@ -200,12 +200,12 @@ struct DiskProfile {
   double gap_depth = 0.0;
 };
 
-template <class P>
-DiskProfile disk_profile(const P& p, const PlanetDiskParams& s) {
+/// The profile from `sigma_at`, Sigma at a list of points (the SPH sum over the whole gas).
+template <class SigmaAt>
+DiskProfile disk_profile_from(SigmaAt&& sigma_at, const PlanetDiskParams& s) {
   const auto n_r = static_cast<std::size_t>(std::ceil((s.r_out - s.r_in) / s.bin_width - 1e-9));
   const paper::PolarGrid grid{s.r_in, s.r_out, 0.0, n_r, 256};
-  const auto mean =
-      paper::azimuthal_average(grid, analysis::interpolate_density<kernel::CubicSpline>(p, grid.points()));
+  const auto mean = paper::azimuthal_average(grid, sigma_at(grid.points()));
   DiskProfile out;
   out.gap_depth = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < n_r; ++i) {
@@ -214,6 +214,13 @@ DiskProfile disk_profile(const P& p, const PlanetDiskParams& s) {
     if (grid.r(i) >= 0.8 && grid.r(i) <= 1.2) out.gap_depth = std::min(out.gap_depth, mean[i] / s.sigma0);
   }
   return out;
+}
+/// The profile of the particles `p` (2D, or seen from above), the whole gas.
+template <class P>
+DiskProfile disk_profile(const P& p, const PlanetDiskParams& s) {
+  return disk_profile_from(
+      [&](const std::vector<Vec<2>>& points) { return analysis::interpolate_density<kernel::CubicSpline>(p, points); },
+      s);
 }
 
 struct DiskRun : examples::RunCost {
@@ -283,7 +290,8 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
     d.orbit = sm.time() / period;
     d.mass = sm.totals().mass;
     d.mass_removed = r.mass_removed;
-    d.gap_depth = disk_profile(seen_from_above(examples::particles_everywhere(sm)), s).gap_depth;
+    const auto& own = seen_from_above(sm.particles());
+    d.gap_depth = disk_profile_from(examples::density_over_ranks<kernel::CubicSpline>(sm, own), s).gap_depth;
     d.particles = examples::count_over_ranks(sm, sm.particles().n_real);
     d.steps = sm.steps();
     d.regularizations = sm.regularizations();

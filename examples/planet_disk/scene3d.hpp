@@ -127,8 +127,11 @@ inline ParticleSet<3, false> flared_disk_columns(const Box<2>& plane, double spa
 
 /// The disk's thickness against hydrostatic equilibrium's: the mass-weighted rms of z / R over R_lo <= R <= R_hi,
 /// over the profile's (1 in equilibrium; the lattice's first sample of a thin disk reads what its sites resolve).
-template <bool E>
-double thickness_ratio(const ParticleSet<3, E>& p, const VerticalProfile& profile, double R_lo, double R_hi) {
+/// `sum` adds the two sums over the ranks (a decomposed run's own particles), or leaves them.
+template <bool E, class Sum = void (*)(std::vector<double>&)>
+double thickness_ratio(
+    const ParticleSet<3, E>& p, const VerticalProfile& profile, double R_lo, double R_hi,
+    Sum&& sum = [](std::vector<double>&) {}) {
   double mz2 = 0.0, m = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) {
     const double R = std::hypot(p.x[a].x(), p.x[a].y());
@@ -136,7 +139,9 @@ double thickness_ratio(const ParticleSet<3, E>& p, const VerticalProfile& profil
     mz2 += p.m[a] * (p.x[a].z() / R) * (p.x[a].z() / R);
     m += p.m[a];
   }
-  return m > 0.0 ? std::sqrt(mz2 / m) / profile.rms_zeta() : 0.0;
+  std::vector<double> sums{mz2, m};
+  sum(sums);
+  return sums[1] > 0.0 ? std::sqrt(sums[0] / sums[1]) / profile.rms_zeta() : 0.0;
 }
 
 /// The particles seen from above: positions (x, y), masses and smoothing lengths; what the 2D disk's

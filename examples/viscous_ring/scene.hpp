@@ -113,25 +113,32 @@ struct RingProfile {
   std::vector<double> x, mean, min, max;
 };
 
-template <class P>
-RingProfile ring_profile(const P& p, double bin_width) {
-  double R_max = 0.0;
-  for (std::size_t a = 0; a < p.n_real; ++a) R_max = std::max(R_max, p.x[a].norm());
-  const auto n_bins = static_cast<std::size_t>(R_max / bin_width) + 1;
+/// The profile of the real particles of `p`; `sum` and `extreme` (the sums, and the least or largest values, over
+/// the ranks, in place) join the bins of the ranks' own particles, or leave them in one process.
+template <class P, class Sum, class Extreme>
+RingProfile ring_profile(const P& p, double bin_width, Sum&& sum_all, Extreme&& extreme) {
+  std::vector<double> R_max{0.0};
+  for (std::size_t a = 0; a < p.n_real; ++a) R_max[0] = std::max(R_max[0], p.x[a].norm());
+  extreme(R_max, false);
+  const auto n_bins = static_cast<std::size_t>(R_max[0] / bin_width) + 1;
   std::vector<double> sum(n_bins, 0.0), lo(n_bins, std::numeric_limits<double>::infinity()), hi(n_bins, 0.0);
-  std::vector<std::size_t> count(n_bins, 0);
+  std::vector<double> count(n_bins, 0.0);
   for (std::size_t a = 0; a < p.n_real; ++a) {
     const auto b = static_cast<std::size_t>(p.x[a].norm() / bin_width);
     sum[b] += p.rho[a];
     lo[b] = std::min(lo[b], p.rho[a]);
     hi[b] = std::max(hi[b], p.rho[a]);
-    ++count[b];
+    count[b] += 1.0;
   }
+  sum_all(sum);
+  sum_all(count);
+  extreme(lo, true);
+  extreme(hi, false);
   RingProfile out;
   for (std::size_t b = 0; b < n_bins; ++b) {
-    if (count[b] == 0) continue;
+    if (count[b] == 0.0) continue;
     out.x.push_back((static_cast<double>(b) + 0.5) * bin_width);
-    out.mean.push_back(sum[b] / static_cast<double>(count[b]));
+    out.mean.push_back(sum[b] / count[b]);
     out.min.push_back(lo[b]);
     out.max.push_back(hi[b]);
   }
@@ -214,8 +221,10 @@ RingRun run_ring(Sim& sim, const ViscousRingParams& s, OnStep&& on_step, OnSnaps
     if (k >= 0) {
       const double mass = sm.totals().mass;
       r.max_mass_error = std::max(r.max_mass_error, std::abs(mass + r.mass_accreted - r.mass_initial) / r.mass_initial);
-      auto snap = measure_ring(s, s.taus[static_cast<std::size_t>(k)], sm.time(),
-                               ring_profile(examples::particles_everywhere(sm), s.bin_width));
+      const auto profile = ring_profile(
+          sm.particles(), s.bin_width, [&](std::vector<double>& v) { examples::sum_over_ranks(sm, v); },
+          [&](std::vector<double>& v, bool least) { examples::extreme_over_ranks(sm, v, least); });
+      auto snap = measure_ring(s, s.taus[static_cast<std::size_t>(k)], sm.time(), profile);
       snap.mass = mass;
       snap.particles = examples::count_over_ranks(sm, sm.particles().n_real);
       r.snapshots.push_back(std::move(snap));
