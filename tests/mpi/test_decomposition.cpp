@@ -259,6 +259,22 @@ double largest_difference_by_position(const std::map<std::uint64_t, std::vector<
   return largest_difference(a, b_as_a, D);
 }
 
+/// Steps both runs until the one process's has made `remaps` regularizations, then 5 steps more; the calls of
+/// step() made (a block of individual steps is one).
+template <class Alone, class Ranks>
+std::uint64_t step_both_past_remaps(Alone& alone, Ranks& ranks, std::uint64_t remaps) {
+  std::uint64_t calls = 0;
+  for (; alone.regularizations() < remaps; ++calls) {
+    alone.step();
+    ranks.step();
+  }
+  for (int i = 0; i < 5; ++i, ++calls) {
+    alone.step();
+    ranks.step();
+  }
+  return calls;
+}
+
 /// A decomposed run against one process's after the same steps: the same remaps, steps and particle count, every
 /// field of every particle within 1e-10 of the field's scale (bit for bit on one rank; on more ranks only where
 /// `fields`), and the mass to 1e-13.
@@ -297,16 +313,7 @@ void compare_rsph_sedov(const char* order_name, int max_bin = 0) {
                                      lattice::Cartesian<2>{dx}, schedule, {.remap = {s.h_over_dx}, .order = Order{}}),
                                  scenes::sedov_time_steps(s), physics::ArtificialViscosity{s.alpha, s.beta},
                                  mpi::Decomposition<2>{});
-  std::uint64_t calls = 0;  // of step(): a block of individual steps is one
-  while (alone.regularizations() < 3) {
-    alone.step();
-    ranks.step();
-    ++calls;
-  }
-  for (int i = 0; i < 5; ++i, ++calls) {  // and on past the last remap
-    alone.step();
-    ranks.step();
-  }
+  const std::uint64_t calls = step_both_past_remaps(alone, ranks, 3);
   INFO(order_name << " remap on " << world().size() << " ranks, max_bin " << max_bin);
   if (max_bin > 0) CHECK(alone.steps() > 2 * calls);  // the blocks were split into substeps
   check_as_one_process<2>(alone, ranks);
@@ -349,14 +356,7 @@ void compare_sod_on_levels(const char* order_name, bool fields = true, Extra... 
   scenes::RsphSodParams r;  // levels 0-2, a remap every 10 steps
   auto alone = scenes::make_rsph_sod<D, kernel::CubicSpline, Order>(s, r, extra...);
   auto ranks = scenes::make_rsph_sod<D, kernel::CubicSpline, Order>(s, r, extra..., mpi::Decomposition<D>{});
-  while (alone.regularizations() < 5) {
-    alone.step();
-    ranks.step();
-  }
-  for (int i = 0; i < 5; ++i) {
-    alone.step();
-    ranks.step();
-  }
+  step_both_past_remaps(alone, ranks, 5);
   INFO(D << "D, " << order_name << " remap on " << world().size() << " ranks");
   check_as_one_process<D>(alone, ranks, fields);
   // every rank chose the levels one process chose, block by block
@@ -410,14 +410,7 @@ void compare_ring_on_rings(const char* order_name) {
   const lattice::Rings lat{s.spacing(), s.inner_radius};
   auto alone = scenes::make_rsph_ring<MG>(s, lat, Order{});
   auto ranks = scenes::make_rsph_ring<MG>(s, lat, Order{}, mpi::Decomposition<2>{});
-  while (alone.regularizations() < 3) {
-    alone.step();
-    ranks.step();
-  }
-  for (int i = 0; i < 5; ++i) {
-    alone.step();
-    ranks.step();
-  }
+  step_both_past_remaps(alone, ranks, 3);
   INFO(order_name << " remap on " << world().size() << " ranks");
   check_as_one_process<2>(alone, ranks);
   const auto t = ranks.totals(), t0 = alone.totals();
