@@ -53,7 +53,7 @@ void measure(std::size_t N, int repeats, const std::filesystem::path& parent) {
   const auto dir = parent / "rsph_bench_files";  // the snapshot's XDMF series goes beside it
   if (c.rank() == 0) std::filesystem::create_directories(dir);
   c.barrier();
-  const auto p = share(N, c);
+  auto p = share(N, c);  // not const: an archive names the fields it saves by reference
   std::vector<bool> ways{false};
   if (rsph::mpi::parallel_hdf5) ways.push_back(true);
   for (const bool together : ways) {
@@ -62,11 +62,8 @@ void measure(std::size_t N, int repeats, const std::filesystem::path& parent) {
     });
     const auto checkpoint = median_seconds(c, repeats, [&] {
       auto ar = rsph::io::Archive::for_saving();
-      auto x = p.x, v = p.v;
-      auto m = p.m, rho = p.rho, h = p.h, u = p.u;
-      auto id = p.id;
-      ar.rows("x", x), ar.rows("v", v), ar.rows("m", m), ar.rows("rho", rho), ar.rows("h", h), ar.rows("u", u);
-      ar.rows("id", id);
+      ar.rows("x", p.x), ar.rows("v", p.v), ar.rows("m", p.m), ar.rows("rho", p.rho), ar.rows("h", p.h);
+      ar.rows("u", p.u), ar.rows("id", p.id);
       ar.write(dir / "bench_files_checkpoint.h5", rsph::mpi::FileTurns(c, together));
     });
     if (c.rank() == 0)

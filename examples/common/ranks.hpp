@@ -11,13 +11,12 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <vector>
-
 #include <cstdint>
 #include <cstdlib>
 #include <span>
 #include <string>
 #include <utility>
+#include <vector>
 #ifdef RSPH_WITH_MPI
 #include "rsph/mpi/decomposition.hpp"
 #endif

@@ -113,8 +113,8 @@ struct RingProfile {
   std::vector<double> x, mean, min, max;
 };
 
-/// The profile of the real particles of `p`; `sum` and `extreme` (the sums, and the least or largest values, over
-/// the ranks, in place) join the bins of the ranks' own particles, or leave them in one process.
+/// The profile of the real particles of `p`; `sum_all` and `extreme` (the sums, and the least or largest values,
+/// over the ranks, in place) join the bins of the ranks' own particles, or leave them in one process.
 template <class P, class Sum, class Extreme>
 RingProfile ring_profile(const P& p, double bin_width, Sum&& sum_all, Extreme&& extreme) {
   std::vector<double> R_max{0.0};
