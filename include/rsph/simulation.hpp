@@ -31,6 +31,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <span>
 #include <string>
 #include <tuple>
@@ -330,22 +331,42 @@ class Simulation {
 
   /// The remap on many ranks: each rank remaps its own particles with those of other ranks out to the remap's
   /// reach, keeps the new particles whose site its own gas held, and checks that the mass over all ranks is
-  /// what it was (a reach too short would lose or double some).
+  /// what it was (a reach too short would lose or double some). A regularizer that remaps by owners builds the
+  /// cells of this rank's own particles only and completes the new cells' sums with the other ranks' parts; the
+  /// others build the cells of the other ranks' particles near this rank's too, and drop the new particles that
+  /// another rank keeps.
   void remap_on_ranks() requires distributed {
+    constexpr bool by_owners = regularize::remaps_by_owners<Reg>();
     auto& d = domain_to_change();
     const auto before = totals();
     double h_max = 0.0;
     for (std::size_t a = 0; a < p_.n_real; ++a) h_max = std::max(h_max, p_.h[a]);
     h_max = d.max(h_max);
     const std::size_t n_own = d.add_remap_halo(p_, box_, d.remap_reach_in_h() * h_max);
-    const auto cells = d.remap_cells(p_, box_, n_own, 0.5 * d.remap_reach_in_h() * h_max);
+    std::vector<std::uint32_t> cells(n_own);
+    std::iota(cells.begin(), cells.end(), 0u);
+    if (!by_owners) cells = d.remap_cells(p_, box_, n_own, 0.5 * d.remap_reach_in_h() * h_max);
     const auto owners = d.site_owners(p_, box_, n_own, Kernel::support * h_max);
     auto info = step_info();
-    info.part = {cells, [&d](double v) { return d.max(v); },
-                 [&owners](std::span<const double> sites) { return owners.owns(sites); },
-                 [&d](std::span<double> v) { d.sum_in_place(v); }, n_own};
+    auto& part = info.part;
+    part.cells = cells;
+    part.max_over_ranks = [&d](double v) { return d.max(v); };
+    part.owns = [&owners](std::span<const double> sites) { return owners.owns(sites); };
+    part.sum_over_ranks = [&d](std::span<double> v) { d.sum_in_place(v); };
+    part.own = n_own;
+    if constexpr (by_owners) {
+      part.owner_of = [&owners](std::span<const double> sites) { return owners.owners(sites); };
+      part.exchange = [&d](const std::vector<std::vector<double>>& out, std::vector<int>* counts) {
+        return d.exchange(out, counts);
+      };
+      part.rank = d.comm().rank();
+      part.ranks = d.ranks();
+    }
     reg_.remap(p_, box_, info);
-    d.keep_owned_sites(p_, owners);
+    if constexpr (by_owners)
+      d.renumber(p_);  // the remap emitted only the cells this rank keeps
+    else
+      d.keep_owned_sites(p_, owners);
     const auto after = totals();
     if (!(std::abs(after.mass - before.mass) <= 1e-12 * before.mass))
       throw NumericalError("the remap on " + std::to_string(d.ranks()) + " ranks changed the mass by " +

@@ -300,6 +300,9 @@ using RsphSedovRanks =
 
 template <class Order>
 void compare_rsph_sedov(const char* order_name, int max_bin = 0) {
+  // first order: each old cell built by its owner alone, the new cells' sums completed across the ranks
+  STATIC_REQUIRE(regularize::remaps_by_owners<scenes::SedovRegularizer<2, kernel::CubicSpline, Order>>() ==
+                 std::is_same_v<Order, regularize::FirstOrder>);
   scenes::SedovParams s;
   s.n = 40;
   s.max_bin = max_bin;

@@ -30,14 +30,14 @@ namespace rsph::mpi {
 
 /// Which rank keeps a point after a remap: the one whose old particle is nearest to it (periodic images included,
 /// ties to the lower identity). Made on every rank from its local set before the remap (its own particles first,
-/// then the other ranks' out to the remap's reach), it answers alike on every rank for a point within `reach` of
-/// an old particle: each new site is one rank's, the one whose gas was there.
+/// then the other ranks' out to the remap's reach, `rank` naming each one's), it answers alike on every rank for a
+/// point within `reach` of an old particle: each new site is one rank's, the one whose gas was there.
 template <int D>
 class SiteOwners {
  public:
   SiteOwners(const std::vector<Vec<D>>& x, const std::vector<std::uint64_t>& id, std::size_t n_own, const Box<D>& box,
-             double reach)
-      : id_(id), n_own_(n_own), reach_(reach), pts_(x), of_(x.size()) {
+             double reach, std::vector<int> rank = {})
+      : id_(id), rank_(std::move(rank)), n_own_(n_own), reach_(reach), pts_(x), of_(x.size()) {
     for (std::size_t i = 0; i < of_.size(); ++i) of_[i] = static_cast<std::uint32_t>(i);
     for (int k = 0; k < D; ++k) {  // images of the points near periodic faces
       if (!box.periodic(k)) continue;
@@ -53,13 +53,34 @@ class SiteOwners {
           }
         }
     }
-    cells_.build(pts_, reach);
+    cells_.build(pts_, first_radius());
   }
 
   /// Whether `site` is this rank's.
-  bool owned(const Vec<D>& site) const {
+  bool owned(const Vec<D>& site) const { return nearest(site) < n_own_; }
+  /// The rank that keeps `site`.
+  int owner(const Vec<D>& site) const { return rank_.at(nearest(site)); }
+  /// Per point of `sites` (D coordinates after another): whether it is this rank's.
+  std::vector<std::uint8_t> owns(std::span<const double> sites) const { return per_site<std::uint8_t>(sites, true); }
+  /// Per point of `sites`: the rank that keeps it.
+  std::vector<int> owners(std::span<const double> sites) const { return per_site<int>(sites, false); }
+
+ private:
+  template <class T>
+  std::vector<T> per_site(std::span<const double> sites, bool mine_only) const {
+    std::vector<T> out(sites.size() / D);
+    rsph::run_parallel(out.size(), [&](int, std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) {
+        const Eigen::Map<const Vec<D>> site(sites.data() + D * i);
+        out[i] = mine_only ? T(owned(site)) : T(owner(site));
+      }
+    });
+    return out;
+  }
+  /// The local index of the old particle nearest to `site`.
+  std::size_t nearest(const Vec<D>& site) const {
     const std::size_t none = id_.size();
-    for (double r = reach_;; r *= 2.0) {
+    for (double r = first_radius();; r *= 2.0) {
       double best = std::numeric_limits<double>::infinity();
       std::size_t who = none;
       cells_.for_each_within(site, r, [&](std::uint32_t j) {
@@ -67,21 +88,17 @@ class SiteOwners {
         const std::size_t o = of_[j];
         if (d2 < best || (d2 == best && who < none && id_[o] < id_[who])) best = d2, who = o;
       });
-      if (who < none && best <= r * r) return who < n_own_;
+      if (who < none && best <= r * r) return who;
       require(r < 1e6 * reach_, "regularization: a new site has no old particle near it");
     }
   }
-  /// Per point of `sites` (D coordinates after another): whether it is this rank's.
-  std::vector<std::uint8_t> owns(std::span<const double> sites) const {
-    std::vector<std::uint8_t> mine(sites.size() / D);
-    rsph::run_parallel(mine.size(), [&](int, std::size_t begin, std::size_t end) {
-      for (std::size_t i = begin; i < end; ++i) mine[i] = owned(Eigen::Map<const Vec<D>>(sites.data() + D * i));
-    });
-    return mine;
-  }
 
- private:
+  /// The first search radius, and the cell list's: most sites have an old particle within a quarter of the
+  /// reach (half an h), and a radius twice as large is tried where none is.
+  double first_radius() const { return 0.25 * reach_; }
+
   std::vector<std::uint64_t> id_;
+  std::vector<int> rank_;  ///< the rank that owns each particle of the local set
   std::size_t n_own_;
   double reach_;
   std::vector<Vec<D>> pts_;
@@ -265,8 +282,11 @@ class Decomposition {
     counts_.remap_halo_points = halo_count_;
     p.id.resize(n_own);
     p.id.insert(p.id.end(), halo_count_, 0);
-    const auto ids = send(std::vector<std::uint64_t>(p.id.begin(), p.id.begin() + n_own), halo_send_);
+    std::vector<int> from;
+    const auto ids = send(std::vector<std::uint64_t>(p.id.begin(), p.id.begin() + n_own), halo_send_, &from);
     std::copy(ids.begin(), ids.end(), p.id.begin() + static_cast<std::ptrdiff_t>(n_own));
+    remap_rank_.assign(n_own, comm_->rank());
+    for (std::size_t q = 0; q < from.size(); ++q) remap_rank_.insert(remap_rank_.end(), std::size_t(from[q]), int(q));
     p.n_real = p.x.size();
     p.ghost_source.clear();
     return n_own;
@@ -294,7 +314,9 @@ class Decomposition {
   /// for sites within `reach` of an old particle.
   template <bool E>
   SiteOwners<D> site_owners(const ParticleSet<D, E>& p, const Box<D>& box, std::size_t n_own, double reach) const {
-    return SiteOwners<D>(p.x, p.id, n_own, box, reach);
+    std::vector<int> rank = remap_rank_;
+    rank.resize(p.n_real, comm_->rank());  // one rank: no halo
+    return SiteOwners<D>(p.x, p.id, n_own, box, reach, std::move(rank));
   }
 
   /// After the remap of the local set: keeps the new particles whose site is this rank's (`owners`, made before
@@ -316,6 +338,13 @@ class Decomposition {
     p.next_id += first;
     p.renumber();
     p.next_id += total - first - mine;
+  }
+
+  /// Sends list q to rank q; returns what every rank sent here, in rank order, with the count from each when asked
+  /// for (the remap by owners' partial sums).
+  std::vector<double> exchange(const std::vector<std::vector<double>>& out, std::vector<int>* counts = nullptr) const {
+    for (const auto& list : out) counts_.bytes_sent += list.size() * sizeof(double);
+    return comm_->exchange(out, counts);
   }
 
   /// Every rank's values, in rank order, on every rank (a few values per rank: a reduction keyed by name).
@@ -384,9 +413,10 @@ class Decomposition {
     return a;
   }
 
-  /// f[a] for every a of lists[q], to rank q; what the other ranks sent here, in rank order.
+  /// f[a] for every a of lists[q], to rank q; what the other ranks sent here, in rank order (with how many each
+  /// sent, when asked for).
   template <class T>
-  std::vector<T> send(const std::vector<T>& f, const Lists& lists) const {
+  std::vector<T> send(const std::vector<T>& f, const Lists& lists, std::vector<int>* from = nullptr) const {
     using S = typename detail::Parts<T>::Scalar;
     constexpr int k = detail::Parts<T>::n;
     std::vector<std::vector<S>> out(lists.size());
@@ -400,7 +430,9 @@ class Decomposition {
       }
       counts_.bytes_sent += out[q].size() * sizeof(S);
     }
-    const auto in = comm_->exchange(out);
+    const auto in = comm_->exchange(out, from);
+    if (from)
+      for (auto& n : *from) n /= k;
     std::vector<T> r(in.size() / k);
     for (std::size_t i = 0; i < r.size(); ++i) {
       if constexpr (std::is_same_v<T, S>)
@@ -418,6 +450,7 @@ class Decomposition {
   int steps_ = 0;
   Lists halo_send_;  ///< per rank: the real particles whose halos it holds, in the order it holds them
   std::size_t halo_first_ = 0, halo_count_ = 0;
+  std::vector<int> remap_rank_;  ///< after add_remap_halo: the rank that owns each particle of the local set
   mutable ExchangeCounts counts_;
 };
 

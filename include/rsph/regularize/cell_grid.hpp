@@ -64,6 +64,26 @@ struct CellGrid {
   }
 };
 
+/// Calls f(g) for every cell of `grid` within `layers` index steps of cell c on each axis, c left out.
+template <int D, class F>
+void for_each_cell_within(const CellGrid<D>& grid, std::size_t c, int layers, F&& f) {
+  const auto idx = grid.unflat(c);
+  std::array<std::int64_t, D> off;
+  off.fill(-layers);
+  for (;;) {
+    std::array<std::int64_t, D> nb;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) nb[k] = idx[k] + off[k];
+    const std::int64_t g = grid.flat(nb);
+    if (g >= 0 && static_cast<std::size_t>(g) != c) f(static_cast<std::size_t>(g));
+    std::size_t k = 0;
+    for (; k < static_cast<std::size_t>(D); ++k) {
+      if (++off[k] <= layers) break;
+      off[k] = -layers;
+    }
+    if (k == static_cast<std::size_t>(D)) break;
+  }
+}
+
 /// The largest smoothing length of the real particles: old cells reach at most the closing radius in h of it.
 template <int D, bool E>
 double max_smoothing_length(const ParticleSet<D, E>& p) {

@@ -88,6 +88,16 @@ constexpr bool remaps_on_ranks() {
     return false;
 }
 
+/// Whether regularizer R builds each old cell once on many ranks, by its owner (`remaps_by_owners`), rather than
+/// every cell near a rank's particles on that rank.
+template <class R>
+constexpr bool remaps_by_owners() {
+  if constexpr (requires { R::remaps_by_owners; })
+    return R::remaps_by_owners;
+  else
+    return false;
+}
+
 /// Plain SPH: never regularize.
 struct None {
   static constexpr bool remaps_on_ranks = true;

@@ -98,6 +98,12 @@ class LatticeRegularizer {
     requires Lattice::remaps_on_ranks;
   };
 
+  /// On many ranks, the first-order remap onto a lattice fixed by the box builds each old cell once, on the rank
+  /// that owns its particle, and sends the overlaps to the ranks that keep the new cells (owner_sums.hpp); the
+  /// others build the cells of their neighbours' particles near them too.
+  static constexpr bool remaps_by_owners =
+      RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice> && std::is_same_v<Order, FirstOrder>;
+
   using Options = RegularizerOptions<Builder, Region, Order>;
 
   explicit LatticeRegularizer(Lattice lattice, Schedule schedule, Options options = {})

@@ -17,6 +17,7 @@
 #include "rsph/regularize/old_cells_2d.hpp"
 #include "rsph/regularize/old_cells_3d.hpp"
 #include "rsph/regularize/old_cells_sites.hpp"
+#include "rsph/regularize/owner_sums.hpp"
 #include "rsph/regularize/region.hpp"
 #include "rsph/regularize/remap_params.hpp"
 #include "rsph/regularize/sums.hpp"
@@ -119,6 +120,8 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
   if constexpr (D == 1) {
     for_each_old_interval(p, box, lattice, params, grid,
                           [&](std::size_t a, double left, double right, const auto& overlaps, double V_o) {
+                            if (!only.empty() && !std::binary_search(only.begin(), only.end(), std::uint32_t(a)))
+                              return;
                             sums[0].add(overlaps, V_o, p.m[a], p.v[a], specific_energy(a), right - left);
                           });
   } else {
@@ -256,21 +259,7 @@ void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<st
 /// Calls f(g) for the up to 3^D - 1 cells of `grid` around cell c (wrapping periodic axes).
 template <int D, class F>
 void for_each_grid_neighbour(const CellGrid<D>& grid, std::size_t c, F&& f) {
-  const auto idx = grid.unflat(c);
-  std::array<std::int64_t, D> off;
-  off.fill(-1);
-  for (;;) {
-    std::array<std::int64_t, D> nb;
-    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) nb[k] = idx[k] + off[k];
-    const std::int64_t g = grid.flat(nb);
-    if (g >= 0 && static_cast<std::size_t>(g) != c) f(static_cast<std::size_t>(g));
-    std::size_t k = 0;
-    for (; k < static_cast<std::size_t>(D); ++k) {
-      if (++off[k] <= 1) break;
-      off[k] = -1;
-    }
-    if (k == static_cast<std::size_t>(D)) break;
-  }
+  for_each_cell_within(grid, c, 1, f);
 }
 
 /// The end of every remap: the shares of nearly empty cells handed on, and one new particle per kept cell (each
@@ -289,6 +278,8 @@ void hand_on_and_emit(ParticleSet<D, E>& p, Sums<D>& S, const RemapParams& param
         });
       },
       stats.dropped_cells, keep, part);
+  for (std::size_t c = 0; c < ws.elsewhere.size(); ++c)
+    if (ws.elsewhere[c]) keep[c] = 0;  // another rank's cell: its hand-on was read, its particle is born there
   auto& order = ws.order;
   order.resize(S.size());
   std::iota(order.begin(), order.end(), std::size_t{0});
@@ -379,6 +370,15 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws, false, true, part.cells);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
+  ws.elsewhere.clear();
+  if constexpr (!PerSiteLattice<Lattice>) {
+    if (part.by_owners()) {  // the sums travel by flat index on the grid of the whole set, alike on every rank
+      const auto whole = detail::candidate_grid(p, box, lattice, params, 1, part);
+      S = detail::complete_on_owners(detail::on_whole_grid(S, grid, whole), whole, box, lattice, part, ws.elsewhere);
+      detail::emit_on_lattice(p, box, lattice, params, whole, S, ws, stats, part);
+      return stats;
+    }
+  }
   detail::emit_on_lattice(p, box, lattice, params, grid, S, ws, stats, part);
   return stats;
 }

@@ -54,11 +54,21 @@ struct RankPart {
   /// How many of the local set's first particles are this rank's own (the others are other ranks' out to the
   /// remap's reach): a sum over the whole set adds only these on each rank. Every one in one process.
   std::size_t own = std::numeric_limits<std::size_t>::max();
+  /// The remap by owners (a first-order remap onto a lattice fixed by the box): each rank built the cells of its
+  /// own particles only, and completes the sums of the new cells it keeps with the others' parts
+  /// (owner_sums.hpp). `owner_of` names the rank that keeps each point (D coordinates after another);
+  /// `exchange` sends list q to rank q and returns what every rank sent here in rank order (with the count from
+  /// each, when asked for).
+  std::function<std::vector<int>(std::span<const double>)> owner_of;
+  std::function<std::vector<double>(const std::vector<std::vector<double>>&, std::vector<int>*)> exchange;
+  int rank = 0, ranks = 1;
 
   double max(double v) const { return max_over_ranks ? max_over_ranks(v) : v; }
   double min(double v) const { return max_over_ranks ? -max_over_ranks(-v) : v; }
   /// Whether the remap is one rank's part of a decomposed set.
   bool on_ranks() const { return static_cast<bool>(max_over_ranks); }
+  /// Whether every old cell was built by its owner alone, so that the new cells' sums must be completed.
+  bool by_owners() const { return static_cast<bool>(exchange); }
 };
 
 /// What a remap carries into one new cell: mass (eq. 6), momentum (eq. 8), total energy m (e + v^2/2) (eq. 9

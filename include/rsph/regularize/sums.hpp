@@ -198,6 +198,8 @@ template <int D>
 struct RemapWorkspace {
   std::vector<detail::Sums<D>> sums;  ///< per thread
   std::vector<std::uint8_t> keep;
+  /// On many ranks, the remap by owners: the cells another rank keeps, whose sums the hand-on reads.
+  std::vector<std::uint8_t> elsewhere;
   std::vector<std::size_t> order;
   std::vector<double> closing;
   /// Distance from each old particle to its cell's farthest vertex, when the overlap pass is asked for it
