@@ -7,10 +7,14 @@ model's halo fractions beside the ones measured at 2 and 4 ranks.
 Per step and rank, with n = N / P particles:
   compute   t_c = n c                          c: measured seconds per particle-step (one thread)
   halo      H = k_h n^(2/3)                    particles; k_h fitted to the measured halo fractions
-  remap     t_r = (f_r c_r n)(1 + 2 R_c / L)^3 every T steps, a rank builds the old cells of its part widened by
-                                               R_c = 6 h (h = 1.2 spacings), L = n^(1/3) spacings
+  remap     by owners (the first-order remap onto a fixed lattice): t_r = c_r n every T steps, a rank builds
+            the old cells of its own particles; it sends the sums of the new cells on its surface,
+            S_1 = ((1 + 2 / L)^3 - 1) n, and answers for the two layers of the hand-on, S_2, at b_s bytes each,
+            in 3 more all-to-alls
+            widened (second order, multi-level lattices, rings): t_r = (c_r n)(1 + 2 R_c / L)^3, a rank builds
+            the old cells of its part widened by R_c = 6 h (h = 1.2 spacings), L = n^(1/3) spacings
   messages  t_m = m_a alpha P + m_r alpha log2 P + b (H + H_r / T) / beta
-            H_r = ((1 + 2 R_r / L)^3 - 1) n: the particles a remap gathers, within R_r = 12 h
+            H_r = ((1 + 2 R_r / L)^3 - 1) n: the particles a remap gathers, within R_r = 12 h (both ways)
             m_a all-to-alls (dense counts: alpha P each), m_r reductions (alpha log2 P each),
             b bytes per halo particle per step
   imbalance a fixed 5 % (Zoltan's tolerance)
@@ -30,6 +34,8 @@ ALLTOALLS = 30                   # per step: 15 field exchanges (9 for the halos
 REDUCTIONS = 23                  # per step: balance (2), time step, h_max (2), fits, due, check, totals (14)
 REMAP_CELLS_IN_H = 6             # a remap builds the old cells of its own particles and of others within 6 h
 REMAP_HALO_IN_H = 12             # and gathers every particle within 12 h (the generators those cells need)
+BYTES_PER_SUM = 8 * 7            # by owners: a new cell's flat index, m, m v, E and volume
+OWNER_ALLTOALLS = 3              # by owners: the parts, the window's request and its answer
 # measured halo fractions of rsph-sedov --method sph --r-end 0.12, 3D, at P = 2 and 4 (n = N / P)
 MEASURED = [(16, 2, 0.625), (24, 2, 0.417), (32, 2, 0.375), (40, 2, 0.30),
             (16, 4, 1.64), (24, 4, 1.01), (32, 4, 0.89), (40, 4, 0.69)]
@@ -45,7 +51,7 @@ def fit_halo():
     return sum(f * m ** (-1 / 3) for m, f in pts) / sum(m ** (-2 / 3) for m, f in pts)
 
 
-def efficiency(N, P, k_h, rsph=True):
+def efficiency(N, P, k_h, rsph=True, by_owners=True):
     n = N / P
     c = C_RSPH if rsph else C_SPH
     t_c = n * c
@@ -54,9 +60,14 @@ def efficiency(N, P, k_h, rsph=True):
     t_r, t_r_serial = 0.0, 0.0
     if rsph:
         L = n ** (1 / 3)
-        widen = min((1 + 2 * REMAP_CELLS_IN_H * 1.2 / L) ** 3, P)
         t_r_serial = REMAP * n / STEPS_PER_REMAP
-        t_r = t_r_serial * widen
+        if by_owners:
+            t_r = t_r_serial
+            surface = min(((1 + 2 / L) ** 3 - 1) * n, N - n)
+            window = min(((1 + 4 / L) ** 3 - 1) * n, N - n)
+            t_m += (OWNER_ALLTOALLS * ALPHA * P + BYTES_PER_SUM * (surface + window) / BETA) / STEPS_PER_REMAP
+        else:
+            t_r = t_r_serial * min((1 + 2 * REMAP_CELLS_IN_H * 1.2 / L) ** 3, P)
         gathered = min(((1 + 2 * REMAP_HALO_IN_H * 1.2 / L) ** 3 - 1) * n, N - n)
         t_m += BYTES_PER_HALO * gathered / BETA / STEPS_PER_REMAP
     useful = t_c + t_r_serial
@@ -74,15 +85,16 @@ def main():
         for n, P, f in MEASURED:
             m = n ** 3 / P
             print(f"n = {n}^3, P = {P}: measured {f:.3f}, model {min(k_h * m ** (-1 / 3), P - 1):.3f}")
-    print("| particles | ranks | particles per rank | halo / own | step: compute, remap, messages (ms) | "
-          "efficiency RSPH | efficiency SPH |")
-    print("|---|---|---|---|---|---|---|")
+    print("| particles | ranks | particles per rank | halo / own | RSPH step by owners: compute, remap, messages "
+          "(ms) | efficiency RSPH, by owners | widened | SPH |")
+    print("|---|---|---|---|---|---|---|---|")
     for N in (1e7, 1e8):
         for P in (64, 512, 4096):
             e, t_c, t_r, t_m, frac = efficiency(N, P, k_h, True)
+            e_wide = efficiency(N, P, k_h, True, False)[0]
             e_sph = efficiency(N, P, k_h, False)[0]
             print(f"| {N:.0e} | {P} | {N / P:.0f} | {frac:.2f} | {1e3 * t_c:.1f}, {1e3 * t_r:.1f}, {1e3 * t_m:.1f} | "
-                  f"{e:.2f} | {e_sph:.2f} |")
+                  f"{e:.2f} | {e_wide:.2f} | {e_sph:.2f} |")
 
 
 if __name__ == "__main__":
