@@ -9,6 +9,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <map>
 #include <random>
@@ -93,6 +94,29 @@ TEST_CASE("ExactSum: the same bits in any order and any split, within an ulp of 
   split_b.add(split_a);
   CHECK(forward.value() == split_b.value());
   CHECK(std::abs(forward.value() - static_cast<double>(reference)) <= 1e-15 * largest);
+}
+
+TEST_CASE("ExactSum: the limbs of every term are its digits below 2^E, at any scale a double has", "[mpi][sum]") {
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  // E from the subnormal range to past the largest power of two a double holds (where ldexp scales alone)
+  for (const int e : {-1074, -1060, -1022, -3, 0, 1, 40, 1022, 1023, 1024}) {
+    ExactSum sum(e);
+    std::array<std::int64_t, ExactSum::kLimbs> digits{};
+    for (int k = 0; k < 2000; ++k) {
+      const double x = u(rng) * std::ldexp(1.0, e - static_cast<int>(rng() % 130));
+      if (!(std::abs(x) < std::ldexp(1.0, e))) continue;
+      sum.add(x);
+      double y = std::ldexp(x, -e);  // the reference: every digit scaled by ldexp
+      for (std::size_t i = 0; i < digits.size(); ++i) {
+        y = std::ldexp(y, ExactSum::kBits);
+        digits[i] += static_cast<std::int64_t>(std::trunc(y));
+        y -= std::trunc(y);
+      }
+    }
+    INFO("E = " << e);
+    CHECK(sum.limbs() == digits);
+  }
 }
 
 TEST_CASE("Comm: the all-to-all delivers each rank's values in rank order, and reductions agree", "[mpi]") {

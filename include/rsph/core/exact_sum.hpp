@@ -28,13 +28,16 @@ class ExactSum {
     return e;
   }
 
-  explicit ExactSum(int exponent) : exponent_(exponent) {}
+  explicit ExactSum(int exponent)
+      : exponent_(exponent), scale_(exponent >= -1022 && exponent <= 1022 ? std::ldexp(1.0, -exponent) : 0.0) {}
 
   /// Adds x (|x| < 2^exponent); the part below the last limb is dropped, the same way whatever the order.
+  /// Scaling by a power of two is one correctly rounded product: the bits ldexp gives, at half the cost.
   void add(double x) {
-    double y = std::ldexp(x, -exponent_);
+    static_assert(kBits == 30, "a limb's scale below is 2^kBits");
+    double y = scale_ != 0.0 ? x * scale_ : std::ldexp(x, -exponent_);
     for (int i = 0; i < kLimbs; ++i) {
-      y = std::ldexp(y, kBits);
+      y *= 0x1p30;
       const double digit = std::trunc(y);
       limbs_[static_cast<std::size_t>(i)] += static_cast<std::int64_t>(digit);
       y -= digit;
@@ -65,6 +68,7 @@ class ExactSum {
 
  private:
   int exponent_;
+  double scale_;  ///< 2^-exponent where a double holds it, 0 where ldexp must scale
   Limbs limbs_{};
 };
 
