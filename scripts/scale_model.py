@@ -10,11 +10,13 @@ Per step and rank, with n = N / P particles:
   remap     by owners (the first-order remap onto a fixed lattice): t_r = c_r n every T steps, a rank builds
             the old cells of its own particles; it sends the sums of the new cells on its surface,
             S_1 = ((1 + 2 / L)^3 - 1) n, and answers for the two layers of the hand-on, S_2, at b_s bytes each,
-            in 3 more all-to-alls
+            in 3 more all-to-alls; it gathers the particles within R_o = 4 h (its own cells' generators and
+            the keepers of the new cells it asks about; measured: one remap in 41 gathers farther, on the disk)
             widened (second order, multi-level lattices, rings): t_r = (c_r n)(1 + 2 R_c / L)^3, a rank builds
             the old cells of its part widened by R_c = 6 h (h = 1.2 spacings), L = n^(1/3) spacings
   messages  t_m = m_a alpha P + m_r alpha log2 P + b (H + H_r / T) / beta
-            H_r = ((1 + 2 R_r / L)^3 - 1) n: the particles a remap gathers, within R_r = 12 h (both ways)
+            H_r = ((1 + 2 R_r / L)^3 - 1) n: the particles a remap gathers, within R_r = R_o by owners and
+            12 h widened
             m_a all-to-alls (dense counts: alpha P each), m_r reductions (alpha log2 P each),
             b bytes per halo particle per step
   imbalance a fixed 5 % (Zoltan's tolerance)
@@ -34,6 +36,7 @@ ALLTOALLS = 30                   # per step: 15 field exchanges (9 for the halos
 REDUCTIONS = 23                  # per step: balance (2), time step, h_max (2), fits, due, check, totals (14)
 REMAP_CELLS_IN_H = 6             # a remap builds the old cells of its own particles and of others within 6 h
 REMAP_HALO_IN_H = 12             # and gathers every particle within 12 h (the generators those cells need)
+OWNER_HALO_IN_H = 4              # by owners: gathers within 4 h (DecompositionParams::owner_reach_in_h)
 BYTES_PER_SUM = 8 * 7            # by owners: a new cell's flat index, m, m v, E and volume
 OWNER_ALLTOALLS = 3              # by owners: the parts, the window's request and its answer
 # measured halo fractions of rsph-sedov --method sph --r-end 0.12, 3D, at P = 2 and 4 (n = N / P)
@@ -68,11 +71,20 @@ def efficiency(N, P, k_h, rsph=True, by_owners=True):
             t_m += (OWNER_ALLTOALLS * ALPHA * P + BYTES_PER_SUM * (surface + window) / BETA) / STEPS_PER_REMAP
         else:
             t_r = t_r_serial * min((1 + 2 * REMAP_CELLS_IN_H * 1.2 / L) ** 3, P)
-        gathered = min(((1 + 2 * REMAP_HALO_IN_H * 1.2 / L) ** 3 - 1) * n, N - n)
+        reach = OWNER_HALO_IN_H if by_owners else REMAP_HALO_IN_H
+        gathered = min(((1 + 2 * reach * 1.2 / L) ** 3 - 1) * n, N - n)
         t_m += BYTES_PER_HALO * gathered / BETA / STEPS_PER_REMAP
     useful = t_c + t_r_serial
     total = 1.05 * (t_c + t_r) + t_m
     return useful / total, t_c, t_r, t_m, H / n
+
+
+def remap_set(N, P, by_owners=True):
+    """The particles a rank holds during a remap, its own and those it gathers, over its own."""
+    n = N / P
+    L = n ** (1 / 3)
+    reach = OWNER_HALO_IN_H if by_owners else REMAP_HALO_IN_H
+    return 1 + min(((1 + 2 * reach * 1.2 / L) ** 3 - 1) * n, N - n) / n
 
 
 def main():
@@ -86,15 +98,15 @@ def main():
             m = n ** 3 / P
             print(f"n = {n}^3, P = {P}: measured {f:.3f}, model {min(k_h * m ** (-1 / 3), P - 1):.3f}")
     print("| particles | ranks | particles per rank | halo / own | RSPH step by owners: compute, remap, messages "
-          "(ms) | efficiency RSPH, by owners | widened | SPH |")
-    print("|---|---|---|---|---|---|---|---|")
+          "(ms) | efficiency RSPH, by owners | widened | SPH | a remap's set / own, by owners | widened |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for N in (1e7, 1e8):
         for P in (64, 512, 4096):
             e, t_c, t_r, t_m, frac = efficiency(N, P, k_h, True)
             e_wide = efficiency(N, P, k_h, True, False)[0]
             e_sph = efficiency(N, P, k_h, False)[0]
             print(f"| {N:.0e} | {P} | {N / P:.0f} | {frac:.2f} | {1e3 * t_c:.1f}, {1e3 * t_r:.1f}, {1e3 * t_m:.1f} | "
-                  f"{e:.2f} | {e_wide:.2f} | {e_sph:.2f} |")
+                  f"{e:.2f} | {e_wide:.2f} | {e_sph:.2f} | {remap_set(N, P):.1f} | {remap_set(N, P, False):.1f} |")
 
 
 if __name__ == "__main__":

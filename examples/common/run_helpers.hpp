@@ -86,9 +86,9 @@ class ConservationLog {
   io::CsvWriter csv_;
 };
 
-/// How a decomposed run shared its work (on more than one rank): ranks, the halo's size against the particles', the
-/// bytes the ranks sent each other per step, and the most wall seconds a rank spent communicating (or waiting for the
-/// others).
+/// How a decomposed run shared its work (on more than one rank): ranks, the halos' sizes against the particles'
+/// (and how often the remap by owners gathered farther), the bytes the ranks sent each other per step, and the most
+/// wall seconds a rank spent communicating (or waiting for the others).
 template <class Sim>
 void write_ranks(io::Json& summary, const Sim& sim) {
   const auto& d = sim.domain();
@@ -98,6 +98,7 @@ void write_ranks(io::Json& summary, const Sim& sim) {
   if (d.ranks() == 1) return;  // one rank sends nothing
   summary.set("halo_fraction", static_cast<double>(d.sum(c.halo_points)) / particles);
   summary.set("remap_halo_fraction", static_cast<double>(d.sum(c.remap_halo_points)) / particles);
+  summary.set("remap_halo_widenings", c.remap_widenings);  // alike on every rank
   summary.set("bytes_sent_per_step", static_cast<double>(d.sum(c.bytes_sent)) / std::max<double>(1, sim.steps()));
   summary.set("particles_migrated", d.sum(c.migrated)).set("partitions", c.partitions);
   summary.set("communication_seconds", d.max(d.communication_seconds()));

@@ -322,8 +322,10 @@ using RsphSedovRanks =
     Simulation<D, kernel::CubicSpline, eos::IdealGas, scenes::SedovRegularizer<D, kernel::CubicSpline, Order>,
                physics::ArtificialViscosity, mpi::Decomposition<D>>;
 
+/// `decomposition`: how the ranks share the run (a first reach of the remap by owners, for one).
 template <class Order>
-void compare_rsph_sedov(const char* order_name, int max_bin = 0) {
+RsphSedovRanks<2, Order> compare_rsph_sedov(const char* order_name, int max_bin = 0,
+                                            mpi::DecompositionParams decomposition = {}) {
   // first order: each old cell built by its owner alone, the new cells' sums completed across the ranks
   STATIC_REQUIRE(regularize::remaps_by_owners<scenes::SedovRegularizer<2, kernel::CubicSpline, Order>>() ==
                  std::is_same_v<Order, regularize::FirstOrder>);
@@ -339,7 +341,7 @@ void compare_rsph_sedov(const char* order_name, int max_bin = 0) {
                                  scenes::SedovRegularizer<2, kernel::CubicSpline, Order>(
                                      lattice::Cartesian<2>{dx}, schedule, {.remap = {s.h_over_dx}, .order = Order{}}),
                                  scenes::sedov_time_steps(s), physics::ArtificialViscosity{s.alpha, s.beta},
-                                 mpi::Decomposition<2>{});
+                                 mpi::Decomposition<2>(MPI_COMM_WORLD, decomposition));
   const std::uint64_t calls = step_both_past_remaps(alone, ranks, 3);
   INFO(order_name << " remap on " << world().size() << " ranks, max_bin " << max_bin);
   if (max_bin > 0) CHECK(alone.steps() > 2 * calls);  // the blocks were split into substeps
@@ -348,6 +350,7 @@ void compare_rsph_sedov(const char* order_name, int max_bin = 0) {
   CHECK(std::abs(t.total_energy() - t0.total_energy()) <= 1e-13 * t0.total_energy());
   CHECK(std::abs(ranks.kinetic_energy_removed() - alone.kinetic_energy_removed()) <=
         1e-10 * alone.kinetic_energy_removed() + 1e-300);
+  return ranks;
 }
 
 }  // namespace
@@ -357,6 +360,38 @@ TEST_CASE(
     "and every particle as one process computes it, first order",
     "[mpi][sim][regularize]") {
   compare_rsph_sedov<regularize::FirstOrder>("first-order");
+}
+
+TEST_CASE(
+    "The remap by owners gathers farther where a rank's cells or the keepers it asks of reach past what it "
+    "gathered: from a quarter of an h, the same remaps and particles as one process",
+    "[mpi][sim][regularize]") {
+  mpi::DecompositionParams narrow;
+  narrow.owner_reach_in_h = 0.25;  // every cell reaches farther than half of it
+  const auto ranks = compare_rsph_sedov<regularize::FirstOrder>("first-order, gathered from h/4", 0, narrow);
+  const std::uint64_t widenings = ranks.domain().counts().remap_widenings;
+  CHECK(world().min(double(widenings)) == world().max(double(widenings)));  // every rank gathered again at once
+  if (world().size() > 1) {
+    CHECK(widenings >= 3);  // 0.25 h, 0.375 h, 0.56 h: all short of a cell's 2 radii
+    // later remaps start from the reach the last one needed
+    CHECK(ranks.domain().owner_reach_in_h() == Approx(0.25 * std::pow(1.5, double(widenings))));
+  } else {
+    CHECK(widenings == 0);  // one rank gathers nothing
+  }
+}
+
+TEST_CASE("Gathered: a ball inside the bounds widened, on a periodic axis in one of its images", "[mpi]") {
+  mpi::Gathered<2> g;
+  CHECK(g.encloses(Vec<2>(5.0, -7.0), 1e6));  // unbounded: everywhere
+  g.lo = Vec<2>(0.2, -mpi::Gathered<2>::inf);
+  g.hi = Vec<2>(0.6, 0.5);
+  g.period = Vec<2>(1.0, 0.0);  // x periodic with length 1, y open below
+  CHECK(g.encloses(Vec<2>(0.4, -100.0), 0.19));
+  CHECK_FALSE(g.encloses(Vec<2>(0.4, -100.0), 0.21));
+  CHECK_FALSE(g.encloses(Vec<2>(0.4, 0.4), 0.11));  // past y's bound
+  CHECK(g.encloses(Vec<2>(1.35, 0.0), 0.05));       // the image at 0.35
+  CHECK(g.encloses(Vec<2>(-0.55, 0.0), 0.05));      // the image at 0.45
+  CHECK_FALSE(g.encloses(Vec<2>(0.9, 0.0), 0.05));  // no image inside
 }
 
 TEST_CASE("Decomposed RSPH, second order: the same remaps and particles as one process", "[mpi][sim][regularize]") {

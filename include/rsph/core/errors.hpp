@@ -15,6 +15,13 @@ struct NumericalError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A rank of a decomposed run cannot decide its share of a remap from the particles it gathered: an old cell, or
+/// the particle nearest to a new site, may reach beyond them. Every rank raises it at the same point; the caller
+/// gathers farther and remaps again.
+struct HaloTooNarrow : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 inline void require(bool condition, const std::string& message) {
   if (!condition) throw InputError(message);
 }

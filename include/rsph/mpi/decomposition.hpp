@@ -28,6 +28,28 @@
 
 namespace rsph::mpi {
 
+/// Where a rank's local set holds every particle of the run after add_remap_halo: the bounds of its own
+/// particles widened by the width gathered, on each axis; unbounded where that passes the bounds of every rank's
+/// particles or, on a periodic axis, spans the box. An old cell or a nearest-particle search inside it is
+/// decided here alike on every rank.
+template <int D>
+struct Gathered {
+  static constexpr double inf = std::numeric_limits<double>::infinity();
+  Vec<D> lo = Vec<D>::Constant(-inf), hi = Vec<D>::Constant(inf);
+  Vec<D> period = Vec<D>::Zero();  ///< the box's length on a periodic axis bounded here, else 0
+
+  /// Whether the ball of radius r about c lies inside (on a periodic axis, one image of it).
+  bool encloses(const Vec<D>& c, double r) const {
+    for (int k = 0; k < D; ++k) {
+      bool in = c[k] - r >= lo[k] && c[k] + r <= hi[k];
+      for (double s : {-1.0, 1.0})
+        in = in || (period[k] > 0.0 && c[k] + s * period[k] - r >= lo[k] && c[k] + s * period[k] + r <= hi[k]);
+      if (!in) return false;
+    }
+    return true;
+  }
+};
+
 /// Which rank keeps a point after a remap: the one whose old particle is nearest to it (periodic images included,
 /// ties to the lower identity). Made on every rank from its local set before the remap (its own particles first,
 /// then the other ranks' out to the remap's reach, `rank` naming each one's), it answers alike on every rank for a
@@ -36,8 +58,14 @@ template <int D>
 class SiteOwners {
  public:
   SiteOwners(const std::vector<Vec<D>>& x, const std::vector<std::uint64_t>& id, std::size_t n_own, const Box<D>& box,
-             double reach, std::vector<int> rank = {})
-      : id_(id), rank_(std::move(rank)), n_own_(n_own), reach_(reach), pts_(x), of_(x.size()) {
+             double reach, std::vector<int> rank = {}, Gathered<D> gathered = {})
+      : id_(id),
+        rank_(std::move(rank)),
+        n_own_(n_own),
+        reach_(reach),
+        gathered_(std::move(gathered)),
+        pts_(x),
+        of_(x.size()) {
     for (std::size_t i = 0; i < of_.size(); ++i) of_[i] = static_cast<std::uint32_t>(i);
     for (int k = 0; k < D; ++k) {  // images of the points near periodic faces
       if (!box.periodic(k)) continue;
@@ -62,7 +90,8 @@ class SiteOwners {
   int owner(const Vec<D>& site) const { return rank_.at(nearest(site)); }
   /// Per point of `sites` (D coordinates after another): whether it is this rank's.
   std::vector<std::uint8_t> owns(std::span<const double> sites) const { return per_site<std::uint8_t>(sites, true); }
-  /// Per point of `sites`: the rank that keeps it.
+  /// Per point of `sites`: the rank that keeps it, or -1 where a particle nearer than the nearest found here
+  /// could lie outside the gathered set (`gathered`), so that only a wider halo tells.
   std::vector<int> owners(std::span<const double> sites) const { return per_site<int>(sites, false); }
 
  private:
@@ -72,13 +101,19 @@ class SiteOwners {
     rsph::run_parallel(out.size(), [&](int, std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
         const Eigen::Map<const Vec<D>> site(sites.data() + D * i);
-        out[i] = mine_only ? T(owned(site)) : T(owner(site));
+        if (mine_only) {
+          out[i] = T(owned(site));
+        } else {
+          double distance = 0.0;
+          const std::size_t a = nearest(site, &distance);
+          out[i] = gathered_.encloses(site, distance) ? T(rank_.at(a)) : T(-1);
+        }
       }
     });
     return out;
   }
   /// The local index of the old particle nearest to `site`.
-  std::size_t nearest(const Vec<D>& site) const {
+  std::size_t nearest(const Vec<D>& site, double* distance = nullptr) const {
     const std::size_t none = id_.size();
     for (double r = first_radius();; r *= 2.0) {
       double best = std::numeric_limits<double>::infinity();
@@ -88,7 +123,10 @@ class SiteOwners {
         const std::size_t o = of_[j];
         if (d2 < best || (d2 == best && who < none && id_[o] < id_[who])) best = d2, who = o;
       });
-      if (who < none && best <= r * r) return who;
+      if (who < none && best <= r * r) {
+        if (distance) *distance = std::sqrt(best);
+        return who;
+      }
       require(r < 1e6 * reach_, "regularization: a new site has no old particle near it");
     }
   }
@@ -101,6 +139,7 @@ class SiteOwners {
   std::vector<int> rank_;  ///< the rank that owns each particle of the local set
   std::size_t n_own_;
   double reach_;
+  Gathered<D> gathered_;
   std::vector<Vec<D>> pts_;
   std::vector<std::uint32_t> of_;  ///< the particle each point (or image) is
   neighbors::CellList<D> cells_;
@@ -117,11 +156,17 @@ struct DecompositionParams {
   /// (about 2h at most), the new cells it meets, the old cells those meet and whose cells they need (three
   /// radii), and two lattice layers for the hand-on of nearly empty cells at the edge of what a rank sees.
   double remap_reach_in_h = 12.0;
+  /// The remap by owners (each old cell built by its owner alone, regularize::remaps_by_owners) gathers the
+  /// particles within this many largest h at first, and half as far again until every rank's own cells and the
+  /// keepers of the new cells it asks about are decided within what it gathered (Gathered); later remaps start
+  /// from the reach the last one needed.
+  double owner_reach_in_h = 4.0;
   void validate() const {
     partition.validate();
     require(rebalance_above >= 1.0, "the decomposition's rebalance threshold must be at least 1");
     require(repartition_every >= 1, "the decomposition must repartition at least every step count >= 1");
     require(remap_reach_in_h > 0.0, "the decomposition's remap reach must be positive");
+    require(owner_reach_in_h > 0.0, "the decomposition's first reach of the remap by owners must be positive");
   }
 };
 
@@ -129,6 +174,7 @@ struct DecompositionParams {
 struct ExchangeCounts {
   std::uint64_t halo_points = 0;        ///< halos received at the last ghost build
   std::uint64_t remap_halo_points = 0;  ///< other ranks' particles remapped with this rank's at the last remap
+  std::uint64_t remap_widenings = 0;    ///< remaps by owners that gathered again, wider, since the start
   std::uint64_t bytes_sent = 0;         ///< since the start: halos, their refreshes, migrations
   std::uint64_t migrated = 0;           ///< particles sent to another rank since the start
   std::uint64_t partitions = 0;         ///< partitions computed
@@ -173,7 +219,9 @@ class Decomposition {
   static constexpr int dim = D;
 
   explicit Decomposition(MPI_Comm comm = MPI_COMM_WORLD, DecompositionParams params = {})
-      : comm_(std::make_shared<Comm>(Comm::duplicate(comm))), params_(std::move(params)) {
+      : comm_(std::make_shared<Comm>(Comm::duplicate(comm))),
+        params_(std::move(params)),
+        owner_reach_in_h_(params_.owner_reach_in_h) {
     params_.validate();
     if (comm_->size() > 1) partitioner_ = std::make_shared<Partitioner<D>>(comm_->get(), params_.partition);
   }
@@ -184,6 +232,8 @@ class Decomposition {
   /// Wall seconds in MPI calls so far (messages, and waiting for the other ranks).
   double communication_seconds() const { return comm_->seconds(); }
   double remap_reach_in_h() const { return params_.remap_reach_in_h; }
+  /// How far, in the largest h, the next remap by owners gathers first: the reach the last one needed.
+  double owner_reach_in_h() const { return owner_reach_in_h_; }
 
   double min(double v) const { return ranks() == 1 ? v : comm_->min(v); }
   double max(double v) const { return ranks() == 1 ? v : comm_->max(v); }
@@ -287,10 +337,26 @@ class Decomposition {
     std::copy(ids.begin(), ids.end(), p.id.begin() + static_cast<std::ptrdiff_t>(n_own));
     remap_rank_.assign(n_own, comm_->rank());
     for (std::size_t q = 0; q < from.size(); ++q) remap_rank_.insert(remap_rank_.end(), std::size_t(from[q]), int(q));
+    gathered_ = gathered_within(p, n_own, box, width);
     p.n_real = p.x.size();
     p.ghost_source.clear();
     return n_own;
   }
+
+  /// Undoes add_remap_halo before a remap by owners that the particles gathered could not decide (every rank at
+  /// once): the local set is the first n_own again, and the remap gathers half as far again from now on.
+  template <bool E>
+  void gather_farther(ParticleSet<D, E>& p, std::size_t n_own) {
+    p.resize_all(n_own);
+    p.n_real = n_own;
+    remap_rank_.clear();
+    gathered_ = {};
+    owner_reach_in_h_ *= 1.5;
+    ++counts_.remap_widenings;
+  }
+
+  /// After add_remap_halo: where the local set holds every particle of the run.
+  const Gathered<D>& gathered() const { return gathered_; }
 
   /// After add_remap_halo, on many ranks: the particles whose cells the remap builds (ascending), this rank's own
   /// n_own and the others within `width` of their bounds (across periodic faces too). Cells farther out feed only
@@ -316,7 +382,7 @@ class Decomposition {
   SiteOwners<D> site_owners(const ParticleSet<D, E>& p, const Box<D>& box, std::size_t n_own, double reach) const {
     std::vector<int> rank = remap_rank_;
     rank.resize(p.n_real, comm_->rank());  // one rank: no halo
-    return SiteOwners<D>(p.x, p.id, n_own, box, reach, std::move(rank));
+    return SiteOwners<D>(p.x, p.id, n_own, box, reach, std::move(rank), gathered_);
   }
 
   /// After the remap of the local set: keeps the new particles whose site is this rank's (`owners`, made before
@@ -400,6 +466,35 @@ class Decomposition {
   template <bool E>
   void receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle);
 
+  /// Where the local set holds every particle, after gathering the others' within `width` of this rank's own
+  /// (the first n_own): the own particles' bounds widened by it, unbounded on an axis where they pass every
+  /// rank's particles' bounds or a periodic box's length.
+  template <bool E>
+  Gathered<D> gathered_within(const ParticleSet<D, E>& p, std::size_t n_own, const Box<D>& box, double width) const {
+    constexpr double inf = std::numeric_limits<double>::infinity();
+    std::vector<double> mine(2 * D);  // lo, hi of the own particles (empty for none)
+    for (int k = 0; k < D; ++k) mine[k] = inf, mine[D + k] = -inf;
+    for (std::size_t a = 0; a < n_own; ++a)
+      for (int k = 0; k < D; ++k)
+        mine[k] = std::min(mine[k], p.x[a][k]), mine[D + k] = std::max(mine[D + k], p.x[a][k]);
+    const auto all = comm_->all_gather(std::span<const double>(mine));
+    Gathered<D> g;
+    for (int k = 0; k < D; ++k) {
+      double lo_all = inf, hi_all = -inf;
+      for (std::size_t q = 0; q < all.size(); q += 2 * D)
+        lo_all = std::min(lo_all, all[q + k]), hi_all = std::max(hi_all, all[q + D + k]);
+      const double lo = mine[k] - width, hi = mine[D + k] + width;
+      if (box.periodic(k)) {
+        const double L = box.hi[k] - box.lo[k];
+        if (!(hi - lo >= L)) g.lo[k] = lo, g.hi[k] = hi, g.period[k] = L;
+      } else {
+        if (lo > lo_all) g.lo[k] = lo;
+        if (hi < hi_all) g.hi[k] = hi;
+      }
+    }
+    return g;
+  }
+
   template <class T>
   static std::vector<T> gather(const std::vector<T>& f, const std::vector<std::uint32_t>& which) {
     std::vector<T> g;
@@ -445,12 +540,14 @@ class Decomposition {
 
   std::shared_ptr<Comm> comm_;  // shared: a Simulation copies its terms
   DecompositionParams params_;
+  double owner_reach_in_h_;  ///< where the next remap by owners starts gathering, in the largest h
   std::shared_ptr<Partitioner<D>> partitioner_;
   bool due_ = true;  ///< the first balance partitions
   int steps_ = 0;
   Lists halo_send_;  ///< per rank: the real particles whose halos it holds, in the order it holds them
   std::size_t halo_first_ = 0, halo_count_ = 0;
   std::vector<int> remap_rank_;  ///< after add_remap_halo: the rank that owns each particle of the local set
+  Gathered<D> gathered_;         ///< after add_remap_halo: where the local set holds every particle
   mutable ExchangeCounts counts_;
 };
 

@@ -7,6 +7,7 @@
 // second exchange (a request, then the answer). What is the same in every dimension is here; the lattice
 // gives the sites, the grid their indices.
 #include "rsph/core/errors.hpp"
+#include "rsph/core/particle_set.hpp"
 #include "rsph/regularize/cell_grid.hpp"
 #include "rsph/regularize/remap_params.hpp"
 #include "rsph/regularize/sums.hpp"
@@ -19,6 +20,23 @@
 #include <vector>
 
 namespace rsph::regularize::detail {
+
+/// Raises HaloTooNarrow on every rank where any rank could not decide its share (`decided` false): a check
+/// every rank makes at the same point, before anything is sent on what an undecided rank computed.
+inline void require_decided_everywhere(bool decided, const RankPart& part, const char* what) {
+  if (part.max(decided ? 0.0 : 1.0) > 0.0)
+    throw HaloTooNarrow(std::string("regularization: ") + what + " reaches beyond the particles a rank gathered");
+}
+
+/// Whether every old cell this rank built (reach >= 0: its farthest point from its particle) is complete: no
+/// particle the local set lacks could cut it, since the local set holds every particle within twice that reach.
+template <int D, bool E>
+bool cells_complete(const ParticleSet<D, E>& p, std::span<const double> reach, const RankPart& part) {
+  if (!part.encloses) return true;
+  for (std::size_t a = 0; a < reach.size(); ++a)
+    if (reach[a] >= 0.0 && !part.encloses(std::span<const double>(p.x[a].data(), D), 2.0 * reach[a])) return false;
+  return true;
+}
 
 /// The numbers one new cell's sums travel as: its flat index, m, m v, E and the covered volume.
 template <int D>
@@ -122,6 +140,8 @@ void add_window(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner, 
     });
   }
   const auto asked_owner = part.owner_of(site_coordinates(std::span<const std::size_t>(unknown), grid, box, lattice));
+  require_decided_everywhere(std::find(asked_owner.begin(), asked_owner.end(), -1) == asked_owner.end(), part,
+                             "the keeper of a new cell near another rank's");
   std::vector<std::vector<double>> ask(static_cast<std::size_t>(part.ranks));
   for (std::size_t i = 0; i < known.size(); ++i)
     ask[static_cast<std::size_t>(known_owner[i])].push_back(static_cast<double>(known[i]));
@@ -145,12 +165,17 @@ void add_window(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner, 
 /// Completes the sums of a remap whose old cells were built by their owners only (part.by_owners()): returns the
 /// sums of the cells this rank keeps, complete, and of the cells within `layers` of them that others keep (for the
 /// hand-on), in lattice order; `elsewhere` flags the latter, which the hand-on reads and the emission skips.
+/// `cells_complete`: whether this rank's old cells are (cells_complete). Raises HaloTooNarrow on every rank where
+/// a rank's cells or the keepers it needs lie beyond what it gathered.
 template <int D, class Lattice>
 Sums<D> complete_on_owners(const Sums<D>& S, const CellGrid<D>& grid, const Box<D>& box, const Lattice& lattice,
-                           const RankPart& part, std::vector<std::uint8_t>& elsewhere, int layers = 2) {
+                           const RankPart& part, bool cells_complete, std::vector<std::uint8_t>& elsewhere,
+                           int layers = 2) {
   require(part.owner_of && part.exchange, "regularization: the remap by owners needs owner_of and exchange");
   require(grid.n_cells < (std::size_t{1} << 53), "regularization: too many lattice cells to send their indices");
   const auto owner = part.owner_of(site_coordinates(std::span<const std::size_t>(S.flat_of), grid, box, lattice));
+  require_decided_everywhere(cells_complete && std::find(owner.begin(), owner.end(), -1) == owner.end(), part,
+                             "an old cell, or the keeper of a new cell it meets,");
   Sums<D> kept = gather_kept_parts(S, owner, part);
   const std::size_t n_kept = kept.size();
   add_window(kept, S, owner, grid, box, lattice, part, layers);

@@ -96,8 +96,8 @@ struct AddToSums {
 /// lattice), the sums over old particles o of
 /// (m_o / V_o) Omega_n^o times 1, v_o and the specific total energy, and the covered volume.
 /// The sums land in workspace.sums[0], dense over the grid or, past params.dense_cells_per_particle cells per
-/// particle and where `allow_sparse`, sparse (sums.hpp). With `record_reach` (2D), workspace.reach receives each
-/// old cell's farthest vertex distance.
+/// particle and where `allow_sparse`, sparse (sums.hpp). With `record_reach`, workspace.reach receives each
+/// old cell's farthest vertex distance (-1 for a cell not built).
 template <class Lattice, class Builder, int D, bool E, class Grid, class Region>
 Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
                              const RemapParams& params, const Grid& grid, const Region& region,
@@ -117,16 +117,17 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
       return 0.0;
   };
 
+  if (record_reach) workspace.reach.assign(n_old, -1.0);  // -1: not built (`only` leaves it out)
   if constexpr (D == 1) {
     for_each_old_interval(p, box, lattice, params, grid,
                           [&](std::size_t a, double left, double right, const auto& overlaps, double V_o) {
                             if (!only.empty() && !std::binary_search(only.begin(), only.end(), std::uint32_t(a)))
                               return;
+                            if (record_reach) workspace.reach[a] = std::max(p.x[a][0] - left, right - p.x[a][0]);
                             sums[0].add(overlaps, V_o, p.m[a], p.v[a], specific_energy(a), right - left);
                           });
   } else {
     set_closing_radii(p, box, params, workspace.closing);
-    if (record_reach) workspace.reach.assign(n_old, -1.0);  // -1: not built (`only` leaves it out)
     AddToSums<D, E> add{&sums, &p, record_reach ? &workspace.reach : nullptr};
     for_each_old_cell(p, box, lattice, builder, grid, region, workspace, add, only);
   }
@@ -367,14 +368,17 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   RemapWorkspace<D> local;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   const auto grid = detail::new_cells(p, box, lattice, params, part);
-  auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws, false, true, part.cells);
+  auto& S = detail::accumulate_overlaps(p, box, lattice, builder, params, grid, region, ws, part.by_owners(), true,
+                                        part.cells);
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
   ws.elsewhere.clear();
   if constexpr (!PerSiteLattice<Lattice>) {
     if (part.by_owners()) {  // the sums travel by flat index on the grid of the whole set, alike on every rank
       const auto whole = detail::candidate_grid(p, box, lattice, params, 1, part);
-      S = detail::complete_on_owners(detail::on_whole_grid(S, grid, whole), whole, box, lattice, part, ws.elsewhere);
+      const bool complete = detail::cells_complete(p, ws.reach, part);
+      S = detail::complete_on_owners(detail::on_whole_grid(S, grid, whole), whole, box, lattice, part, complete,
+                                     ws.elsewhere);
       detail::emit_on_lattice(p, box, lattice, params, whole, S, ws, stats, part);
       return stats;
     }

@@ -61,6 +61,10 @@ struct RankPart {
   /// each, when asked for).
   std::function<std::vector<int>(std::span<const double>)> owner_of;
   std::function<std::vector<double>(const std::vector<std::vector<double>>&, std::vector<int>*)> exchange;
+  /// The remap by owners: whether the ball of a radius about a point (D coordinates) lies where the local set
+  /// holds every particle of the run, so that an old cell reaching half as far is complete here. `owner_of` gives
+  /// -1 for a point whose nearest particle it cannot tell for the same reason. Absent: everywhere.
+  std::function<bool(std::span<const double>, double)> encloses;
   int rank = 0, ranks = 1;
 
   double max(double v) const { return max_over_ranks ? max_over_ranks(v) : v; }
