@@ -10,15 +10,16 @@ Per step and rank, with n = N / P particles:
   remap     by owners (the first-order remap onto a fixed lattice): t_r = c_r n every T steps, a rank builds
             the old cells of its own particles; it sends the sums of the new cells on its surface,
             S_1 = ((1 + 2 / L)^3 - 1) n, and answers for the two layers of the hand-on, S_2, at b_s bytes each,
-            in 3 more all-to-alls; it gathers the particles within R_o = 4 h (its own cells' generators and
+            in 3 more exchanges; it gathers the particles within R_o = 4 h (its own cells' generators and
             the keepers of the new cells it asks about; measured: one remap in 41 gathers farther, on the disk)
             widened (second order, multi-level lattices, rings): t_r = (c_r n)(1 + 2 R_c / L)^3, a rank builds
             the old cells of its part widened by R_c = 6 h (h = 1.2 spacings), L = n^(1/3) spacings
-  messages  t_m = m_a alpha P + m_r alpha log2 P + b (H + H_r / T) / beta
+  messages  t_m = m_x alpha (log2 P + k) + m_r alpha log2 P + b (H + H_r / T) / beta
             H_r = ((1 + 2 R_r / L)^3 - 1) n: the particles a remap gathers, within R_r = R_o by owners and
             12 h widened
-            m_a all-to-alls (dense counts: alpha P each), m_r reductions (alpha log2 P each),
-            b bytes per halo particle per step
+            m_x exchanges (Comm::exchange: a reduction telling each rank how many messages come, alpha log2 P,
+            then one message to and from each of the k ranks it trades with, k = min(P - 1, 26) as for cubes),
+            m_r reductions (alpha log2 P each), b bytes per halo particle per step
   imbalance a fixed 5 % (Zoltan's tolerance)
   efficiency = t_c' / (t_c' + t_r' + t_m + imbalance), primes: what one rank of the serial run would do.
 """
@@ -31,14 +32,14 @@ C_RSPH = (6.53 - 0.646) / (119 * 32768)  # RSPH's SPH step
 REMAP = 0.646 / 4 / 32768        # seconds per particle per remap (first order, cubic lattice)
 STEPS_PER_REMAP = 119 / 4
 BYTES_PER_HALO = 155.0           # measured: 2.97e6 bytes per step for 19 200 halo particles (n = 40, P = 2)
-ALLTOALLS = 30                   # per step: 15 field exchanges (9 for the halos, 6 refreshed), each an MPI_Alltoall
-                                 # of counts and an Alltoallv, dense in P
+EXCHANGES = 15                   # per step: 9 field exchanges for the halos, 6 refreshed
+NEIGHBOURS = 26                  # the ranks a rank trades with (a cube's face, edge and corner neighbours)
 REDUCTIONS = 23                  # per step: balance (2), time step, h_max (2), fits, due, check, totals (14)
 REMAP_CELLS_IN_H = 6             # a remap builds the old cells of its own particles and of others within 6 h
 REMAP_HALO_IN_H = 12             # and gathers every particle within 12 h (the generators those cells need)
 OWNER_HALO_IN_H = 4              # by owners: gathers within 4 h (DecompositionParams::owner_reach_in_h)
 BYTES_PER_SUM = 8 * 7            # by owners: a new cell's flat index, m, m v, E and volume
-OWNER_ALLTOALLS = 3              # by owners: the parts, the window's request and its answer
+OWNER_EXCHANGES = 3              # by owners: the parts, the window's request and its answer
 # measured halo fractions of rsph-sedov --method sph --r-end 0.12, 3D, at P = 2 and 4 (n = N / P)
 MEASURED = [(16, 2, 0.625), (24, 2, 0.417), (32, 2, 0.375), (40, 2, 0.30),
             (16, 4, 1.64), (24, 4, 1.01), (32, 4, 0.89), (40, 4, 0.69)]
@@ -59,7 +60,9 @@ def efficiency(N, P, k_h, rsph=True, by_owners=True):
     c = C_RSPH if rsph else C_SPH
     t_c = n * c
     H = min(k_h * n ** (2 / 3), N - n)
-    t_m = ALLTOALLS * ALPHA * P + REDUCTIONS * ALPHA * math.log2(max(P, 2)) + BYTES_PER_HALO * H / BETA
+    log_p = math.log2(max(P, 2))
+    exchange = ALPHA * (log_p + min(P - 1, NEIGHBOURS))
+    t_m = EXCHANGES * exchange + REDUCTIONS * ALPHA * log_p + BYTES_PER_HALO * H / BETA
     t_r, t_r_serial = 0.0, 0.0
     if rsph:
         L = n ** (1 / 3)
@@ -68,7 +71,7 @@ def efficiency(N, P, k_h, rsph=True, by_owners=True):
             t_r = t_r_serial
             surface = min(((1 + 2 / L) ** 3 - 1) * n, N - n)
             window = min(((1 + 4 / L) ** 3 - 1) * n, N - n)
-            t_m += (OWNER_ALLTOALLS * ALPHA * P + BYTES_PER_SUM * (surface + window) / BETA) / STEPS_PER_REMAP
+            t_m += (OWNER_EXCHANGES * exchange + BYTES_PER_SUM * (surface + window) / BETA) / STEPS_PER_REMAP
         else:
             t_r = t_r_serial * min((1 + 2 * REMAP_CELLS_IN_H * 1.2 / L) ** 3, P)
         reach = OWNER_HALO_IN_H if by_owners else REMAP_HALO_IN_H

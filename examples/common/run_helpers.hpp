@@ -87,8 +87,8 @@ class ConservationLog {
 };
 
 /// How a decomposed run shared its work (on more than one rank): ranks, the halos' sizes against the particles'
-/// (and how often the remap by owners gathered farther), the bytes the ranks sent each other per step, and the most
-/// wall seconds a rank spent communicating (or waiting for the others).
+/// (and how often the remap by owners gathered farther), the bytes the ranks sent each other per step, the most
+/// wall seconds a rank spent communicating (or waiting for the others), and the ranks a rank messaged per exchange.
 template <class Sim>
 void write_ranks(io::Json& summary, const Sim& sim) {
   const auto& d = sim.domain();
@@ -102,6 +102,10 @@ void write_ranks(io::Json& summary, const Sim& sim) {
   summary.set("bytes_sent_per_step", static_cast<double>(d.sum(c.bytes_sent)) / std::max<double>(1, sim.steps()));
   summary.set("particles_migrated", d.sum(c.migrated)).set("partitions", c.partitions);
   summary.set("communication_seconds", d.max(d.communication_seconds()));
+  // the ranks a rank sent to in an exchange, on average (an exchange messages only those it has data for)
+  summary.set("messages_per_exchange",
+              static_cast<double>(d.sum(d.comm().messages())) /
+                  static_cast<double>(std::max<std::uint64_t>(1, d.sum(d.comm().exchanges()))));
 }
 
 /// What a run cost, recorded the same way by every scene's run loop: begin(), count_steps() after each

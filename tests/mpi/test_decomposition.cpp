@@ -140,6 +140,31 @@ TEST_CASE("Comm: the all-to-all delivers each rank's values in rank order, and r
   CHECK(c.all_gather(std::span<const int>(&me, 1)).back() == P - 1);
 }
 
+TEST_CASE("Comm: sparse exchanges, one after another, each deliver only their own messages, in rank order", "[mpi]") {
+  const auto c = world();
+  const int P = c.size(), me = c.rank();
+  for (int round = 0; round < 50; ++round) {
+    // round r: rank q sends (r + q + k) % 3 + 1 values to rank k where (q + k + r) % 3 != 0, nothing elsewhere;
+    // each value names the round, the sender and the receiver
+    const auto sends = [&](int q, int k) { return (q + k + round) % 3 == 0 ? 0 : (round + q + k) % 3 + 1; };
+    std::vector<std::vector<double>> out(static_cast<std::size_t>(P));
+    for (int k = 0; k < P; ++k)
+      out[static_cast<std::size_t>(k)].assign(static_cast<std::size_t>(sends(me, k)), 1e4 * round + 100 * me + k);
+    std::vector<int> counts;
+    const std::uint64_t messages_before = c.messages();
+    const auto in = c.exchange(out, &counts);
+    std::uint64_t messages = 0;  // one to each other rank this one has values for, none elsewhere
+    for (int k = 0; k < P; ++k) messages += k != me && sends(me, k) > 0;
+    CHECK(c.messages() - messages_before == messages);
+    std::vector<double> expected;
+    for (int q = 0; q < P; ++q) {
+      CHECK(counts[static_cast<std::size_t>(q)] == sends(q, me));
+      expected.insert(expected.end(), static_cast<std::size_t>(sends(q, me)), 1e4 * round + 100 * q + me);
+    }
+    CHECK(in == expected);
+  }
+}
+
 TEST_CASE("Decomposition: shared out, partitioned and migrated, every particle lives on one rank with its fields",
           "[mpi]") {
   mpi::Decomposition<2> d;

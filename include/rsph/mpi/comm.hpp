@@ -1,6 +1,6 @@
 #pragma once
 // Thin RAII wrappers over MPI's C API: a communicator the library is handed (it never initialises MPI),
-// typed reductions, and the one exchange pattern the decomposition uses, an all-to-all of typed spans.
+// typed reductions, and the one exchange pattern the decomposition uses, a sparse all-to-all of typed spans.
 // Needs an MPI-3 implementation; link rsph::mpi.
 #include "rsph/core/errors.hpp"
 #include "rsph/core/exact_sum.hpp"
@@ -9,6 +9,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
 #include <type_traits>
@@ -65,7 +66,12 @@ class Comm {
   }
   Comm(const Comm&) = delete;
   Comm& operator=(const Comm&) = delete;
-  Comm(Comm&& o) noexcept : c_(o.c_), owned_(std::exchange(o.owned_, false)), seconds_(o.seconds_) {}
+  Comm(Comm&& o) noexcept
+      : c_(o.c_),
+        owned_(std::exchange(o.owned_, false)),
+        seconds_(o.seconds_),
+        exchanges_(o.exchanges_),
+        messages_(o.messages_) {}
   Comm& operator=(Comm&& o) noexcept {
     if (this != &o) {
       release();
@@ -90,6 +96,9 @@ class Comm {
 
   /// Wall seconds spent in this communicator's calls so far: the messages, and the waits for other ranks.
   double seconds() const { return seconds_; }
+  /// The exchanges made so far, and the messages this rank sent in them (one to each rank it had data for).
+  std::uint64_t exchanges() const { return exchanges_; }
+  std::uint64_t messages() const { return messages_; }
 
   template <class T>
   T all_reduce(T value, MPI_Op op) const {
@@ -127,29 +136,49 @@ class Comm {
   }
 
   /// All-to-all of variable counts: send[q] goes to rank q; returns what each rank sent here, concatenated in
-  /// rank order, with `counts` (per source rank) when asked for.
+  /// rank order, with `counts` (per source rank) when asked for. Sparse: only ranks with something to send send
+  /// a message, so its cost grows with the ranks a rank trades with and log P, not with P. One reduction
+  /// (MPI_Reduce_scatter_block) tells each rank how many will come; it also keeps exchanges apart, since no rank
+  /// sends for the next one before every rank has entered it, and so has received all of this one.
   template <class T>
   std::vector<T> exchange(const std::vector<std::vector<T>>& send, std::vector<int>* counts = nullptr) const {
     const Timer t(seconds_);
-    const auto P = static_cast<std::size_t>(size());
-    std::vector<int> sc(P), sd(P), rc(P), rd(P);
-    std::vector<T> flat;
-    for (std::size_t q = 0; q < P; ++q) {
-      sd[q] = static_cast<int>(flat.size());
-      sc[q] = static_cast<int>(send[q].size());
-      flat.insert(flat.end(), send[q].begin(), send[q].end());
+    const int P = size(), me = rank();
+    require(send.size() == static_cast<std::size_t>(P), "MPI exchange: one list per rank");
+    std::vector<int> sends_to(static_cast<std::size_t>(P), 0);
+    for (int q = 0; q < P; ++q) sends_to[std::size_t(q)] = q != me && !send[std::size_t(q)].empty();
+    int incoming = 0;
+    check(MPI_Reduce_scatter_block(sends_to.data(), &incoming, 1, MPI_INT, MPI_SUM, c_), "MPI_Reduce_scatter_block");
+    constexpr int tag = 4242;  // this wrapper's only point-to-point messages
+    std::vector<MPI_Request> sent;
+    for (int q = 0; q < P; ++q) {
+      const auto& out = send[std::size_t(q)];
+      if (!sends_to[std::size_t(q)]) continue;
+      require(out.size() <= std::size_t(std::numeric_limits<int>::max()), "MPI exchange: a message too long");
+      sent.emplace_back();
+      check(MPI_Isend(out.data(), static_cast<int>(out.size()), datatype<T>(), q, tag, c_, &sent.back()), "MPI_Isend");
     }
-    check(MPI_Alltoall(sc.data(), 1, MPI_INT, rc.data(), 1, MPI_INT, c_), "MPI_Alltoall");
-    int total = 0;
-    for (std::size_t q = 0; q < P; ++q) {
-      rd[q] = total;
-      total += rc[q];
+    std::vector<std::vector<T>> from(static_cast<std::size_t>(P));
+    for (int i = 0; i < incoming; ++i) {
+      MPI_Status status;
+      check(MPI_Probe(MPI_ANY_SOURCE, tag, c_, &status), "MPI_Probe");
+      int n = 0;
+      check(MPI_Get_count(&status, datatype<T>(), &n), "MPI_Get_count");
+      auto& in = from[static_cast<std::size_t>(status.MPI_SOURCE)];
+      in.resize(static_cast<std::size_t>(n));
+      check(MPI_Recv(in.data(), n, datatype<T>(), status.MPI_SOURCE, tag, c_, MPI_STATUS_IGNORE), "MPI_Recv");
     }
-    std::vector<T> recv(static_cast<std::size_t>(total));
-    check(MPI_Alltoallv(flat.data(), sc.data(), sd.data(), datatype<T>(), recv.data(), rc.data(), rd.data(),
-                        datatype<T>(), c_),
-          "MPI_Alltoallv");
-    if (counts) *counts = rc;
+    check(MPI_Waitall(static_cast<int>(sent.size()), sent.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+    ++exchanges_;
+    messages_ += sent.size();
+    from[static_cast<std::size_t>(me)] = send[static_cast<std::size_t>(me)];
+    std::vector<T> recv;
+    if (counts) counts->assign(static_cast<std::size_t>(P), 0);
+    for (int q = 0; q < P; ++q) {
+      const auto& in = from[static_cast<std::size_t>(q)];
+      recv.insert(recv.end(), in.begin(), in.end());
+      if (counts) (*counts)[static_cast<std::size_t>(q)] = static_cast<int>(in.size());
+    }
     return recv;
   }
 
@@ -185,6 +214,7 @@ class Comm {
   MPI_Comm c_;
   bool owned_ = false;
   mutable double seconds_ = 0.0;
+  mutable std::uint64_t exchanges_ = 0, messages_ = 0;
 };
 
 }  // namespace rsph::mpi

@@ -193,6 +193,15 @@ struct Parts<Eigen::Matrix<double, R, C, O, MR, MC>> {  // vectors and matrices,
 };
 }  // namespace detail
 
+/// Can any point of [lo1, hi1] lie within [lo2, hi2]? No where their intervals miss on an axis that is not
+/// periodic (on a periodic one, an image may meet).
+template <int D>
+bool may_meet(const Vec<D>& lo1, const Vec<D>& hi1, const Vec<D>& lo2, const Vec<D>& hi2, const Box<D>& box) {
+  for (int k = 0; k < D; ++k)
+    if (!box.periodic(k) && (hi1[k] < lo2[k] || hi2[k] < lo1[k])) return false;
+  return true;
+}
+
 /// Does a point at x, or one of its periodic images, lie within the box [lo, hi]?
 template <int D>
 bool reaches(const Vec<D>& x, const Vec<D>& lo, const Vec<D>& hi, const Box<D>& box, double width) {
@@ -578,6 +587,12 @@ void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, do
     const double* b = &all[4 * D * static_cast<std::size_t>(q)];
     const Vec<D> lo = Eigen::Map<const Vec<D>>(b), hi = Eigen::Map<const Vec<D>>(b + D);
     const Vec<D> reach_lo = Eigen::Map<const Vec<D>>(b + 2 * D), reach_hi = Eigen::Map<const Vec<D>>(b + 3 * D);
+    // the bounds first, so that a rank looks at its particles only for the ranks near it: O(P + k n), not O(P n)
+    using Map = Eigen::Map<const Vec<D>>;
+    const Vec<D> my_lo = Map(mine.data()), my_hi = Map(mine.data() + D);
+    const Vec<D> my_reach_lo = Map(mine.data() + 2 * D), my_reach_hi = Map(mine.data() + 3 * D);
+    if (!may_meet<D>(my_lo, my_hi, reach_lo, reach_hi, box) && !may_meet<D>(my_reach_lo, my_reach_hi, lo, hi, box))
+      continue;
     for (std::size_t a = 0; a < p.n_real; ++a) {
       const double r = reach(a);
       if (reaches<D>(p.x[a], reach_lo, reach_hi, box, width) ||
