@@ -317,7 +317,7 @@ class Decomposition {
   template <bool E>
   void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
     p.clear_ghosts();
-    if (ranks() > 1) receive_halos(p, box, width, true);
+    if (ranks() > 1) (void)receive_halos(p, box, width, true);
     counts_.halo_points = halo_count_;
     boundary::add_images(p, box, width);
   }
@@ -337,7 +337,7 @@ class Decomposition {
   std::size_t add_remap_halo(ParticleSet<D, E>& p, const Box<D>& box, double width) {
     const std::size_t n_own = p.n_real;
     if (ranks() == 1) return n_own;
-    receive_halos(p, box, width, false);  // as ghosts first, then made real
+    const auto bounds = receive_halos(p, box, width, false);  // as ghosts first, then made real
     counts_.remap_halo_points = halo_count_;
     p.id.resize(n_own);
     p.id.insert(p.id.end(), halo_count_, 0);
@@ -346,7 +346,7 @@ class Decomposition {
     std::copy(ids.begin(), ids.end(), p.id.begin() + static_cast<std::ptrdiff_t>(n_own));
     remap_rank_.assign(n_own, comm_->rank());
     for (std::size_t q = 0; q < from.size(); ++q) remap_rank_.insert(remap_rank_.end(), std::size_t(from[q]), int(q));
-    gathered_ = gathered_within(p, n_own, box, width);
+    gathered_ = gathered_within(bounds, box, width);
     p.n_real = p.x.size();
     p.ghost_source.clear();
     return n_own;
@@ -472,26 +472,22 @@ class Decomposition {
  private:
   using Lists = std::vector<std::vector<std::uint32_t>>;
 
+  /// Appends the halos; returns every rank's bounds it chose them by (4 D numbers a rank: lo, hi of its
+  /// particles, lo, hi of their reaches).
   template <bool E>
-  void receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle);
+  std::vector<double> receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle);
 
-  /// Where the local set holds every particle, after gathering the others' within `width` of this rank's own
-  /// (the first n_own): the own particles' bounds widened by it, unbounded on an axis where they pass every
-  /// rank's particles' bounds or a periodic box's length.
-  template <bool E>
-  Gathered<D> gathered_within(const ParticleSet<D, E>& p, std::size_t n_own, const Box<D>& box, double width) const {
+  /// Where the local set holds every particle, after gathering the others' within `width` of this rank's own:
+  /// the own particles' bounds widened by it, unbounded on an axis where they pass every rank's particles' bounds
+  /// or a periodic box's length. `bounds`: every rank's, as receive_halos returns them.
+  Gathered<D> gathered_within(const std::vector<double>& bounds, const Box<D>& box, double width) const {
     constexpr double inf = std::numeric_limits<double>::infinity();
-    std::vector<double> mine(2 * D);  // lo, hi of the own particles (empty for none)
-    for (int k = 0; k < D; ++k) mine[k] = inf, mine[D + k] = -inf;
-    for (std::size_t a = 0; a < n_own; ++a)
-      for (int k = 0; k < D; ++k)
-        mine[k] = std::min(mine[k], p.x[a][k]), mine[D + k] = std::max(mine[D + k], p.x[a][k]);
-    const auto all = comm_->all_gather(std::span<const double>(mine));
+    const double* mine = &bounds[4 * D * static_cast<std::size_t>(comm_->rank())];
     Gathered<D> g;
     for (int k = 0; k < D; ++k) {
       double lo_all = inf, hi_all = -inf;
-      for (std::size_t q = 0; q < all.size(); q += 2 * D)
-        lo_all = std::min(lo_all, all[q + k]), hi_all = std::max(hi_all, all[q + D + k]);
+      for (std::size_t q = 0; q < bounds.size(); q += 4 * D)
+        lo_all = std::min(lo_all, bounds[q + k]), hi_all = std::max(hi_all, bounds[q + D + k]);
       const double lo = mine[k] - width, hi = mine[D + k] + width;
       if (box.periodic(k)) {
         const double L = box.hi[k] - box.lo[k];
@@ -562,7 +558,8 @@ class Decomposition {
 
 template <int D>
 template <bool E>
-void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle) {
+std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width,
+                                                    bool per_particle) {
   // A pair interacts within support max(h_a, h_b) (times the search margin), so particle a reaches
   // R_a = width h_a / h_max: each rank's bounds, of its particles and of their reaches, go to every rank; a
   // particle goes to a rank whose reach holds it or whose particles it reaches. Without per_particle, R = width.
@@ -581,6 +578,9 @@ void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, do
     }
   const auto all = comm_->all_gather(std::span<const double>(mine));
   const int me = comm_->rank();
+  using Map = Eigen::Map<const Vec<D>>;
+  const Vec<D> my_lo = Map(mine.data()), my_hi = Map(mine.data() + D);
+  const Vec<D> my_reach_lo = Map(mine.data() + 2 * D), my_reach_hi = Map(mine.data() + 3 * D);
   halo_send_.assign(static_cast<std::size_t>(ranks()), {});
   for (int q = 0; q < ranks(); ++q) {
     if (q == me) continue;
@@ -588,9 +588,6 @@ void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, do
     const Vec<D> lo = Eigen::Map<const Vec<D>>(b), hi = Eigen::Map<const Vec<D>>(b + D);
     const Vec<D> reach_lo = Eigen::Map<const Vec<D>>(b + 2 * D), reach_hi = Eigen::Map<const Vec<D>>(b + 3 * D);
     // the bounds first, so that a rank looks at its particles only for the ranks near it: O(P + k n), not O(P n)
-    using Map = Eigen::Map<const Vec<D>>;
-    const Vec<D> my_lo = Map(mine.data()), my_hi = Map(mine.data() + D);
-    const Vec<D> my_reach_lo = Map(mine.data() + 2 * D), my_reach_hi = Map(mine.data() + 3 * D);
     if (!may_meet<D>(my_lo, my_hi, reach_lo, reach_hi, box) && !may_meet<D>(my_reach_lo, my_reach_hi, lo, hi, box))
       continue;
     for (std::size_t a = 0; a < p.n_real; ++a) {
@@ -621,6 +618,7 @@ void Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, do
     p.du_dt.resize(p.x.size(), 0.0);
   }
   for (std::size_t g = 0; g < halo_count_; ++g) p.ghost_source.push_back(std::uint32_t(halo_first_ + g));
+  return all;
 }
 
 template <int D>
