@@ -1,12 +1,14 @@
 #!/usr/bin/python3
 """A run stopped and resumed equals the run left alone, to the bit.
 
-    check_resume.py OUT PROGRAM [FLAGS...] --every X [--wall MINUTES]
+    check_resume.py OUT PROGRAM [FLAGS...] --every X [--wall MINUTES] [--ways wall,signal,killed]
 
 Runs PROGRAM FLAGS four ways into OUT/whole, OUT/wall, OUT/signal and OUT/killed: left alone (with
-checkpoints every X); stopped by --max-wall MINUTES (0.005 unless given) again and again and resumed each time
-until it finishes; stopped by SIGINT once its first checkpoint is written, then resumed; and killed by SIGKILL
-then, which runs no handler and may leave a half-written file, then resumed. Each stop must exit 5 naming its checkpoint and leave
+checkpoints every X); stopped by --max-wall MINUTES (0.005 unless given) again and again and resumed each time,
+up to 12 times, then let finish; stopped by SIGINT once its first checkpoint is written, then resumed; and killed by SIGKILL
+then, which runs no handler and may leave a half-written file, then resumed (--ways names which of the last three to run; all unless given: the signal handlers and the
+checkpoint files are the same code in every program, so a long run may check them through its cheaper
+siblings). Each stop must exit 5 naming its checkpoint and leave
 no .partial file; each finished run must have every snapshot dataset and attribute, every CSV column but
 wall times and every summary.json figure but wall times equal to the run left alone."""
 import glob
@@ -23,6 +25,7 @@ import numpy as np
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "scripts"))
 from rsph_plot import load  # noqa: E402
 
+STOPS = 12  # stops by --max-wall before the run is let finish
 WALL = ("seconds", "per_second", "command_line", "checkpoint-every", "max-wall", "stop-at")
 
 
@@ -110,11 +113,27 @@ def main():
 
     every = take("--every", None)
     wall_limit = take("--wall", "0.005")
+    ways = take("--ways", "wall,signal,killed").split(",")
+    unknown = set(ways) - {"wall", "signal", "killed"}
+    if unknown:
+        fail(f"unknown ways {sorted(unknown)}")
     base = [program, *flags, "--quiet", "--checkpoint-every", every]
     whole, wall, sig = (os.path.join(out, d) for d in ("whole", "wall", "signal"))
     shutil.rmtree(out, ignore_errors=True)  # an earlier checkpoint would be taken for this run's
     run([*base, "--overwrite", "--out", whole], [0])
 
+    stops = resume_after_wall(base, program, whole, wall, wall_limit) if "wall" in ways else 0
+    if "signal" in ways:
+        resume_after_signal(base, program, whole, sig)
+    if "killed" in ways:
+        resume_after_kill(base, program, whole, os.path.join(out, "killed"))
+    done = " and ".join(name for way, name in (("signal", "SIGINT"), ("killed", "SIGKILL")) if way in ways)
+    print(f"check_resume: {os.path.basename(program)} resumed {stops} times after --max-wall"
+          f"{' and once after ' + done if done else ''}; every snapshot, curve and figure equals the run left alone")
+
+
+def resume_after_wall(base, program, whole, wall, wall_limit):
+    """Stopped by --max-wall again and again, resumed each time; returns how many times it stopped."""
     # A faster machine may finish before the limit: take a tenth of it, and so on, until the run is stopped.
     for limit in (float(wall_limit) / 10**k for k in range(4)):
         p = run([*base, "--overwrite", "--out", wall, "--max-wall", f"{limit:g}"], [0, 5])
@@ -125,13 +144,18 @@ def main():
         stopped_message(p, wall)
         no_partial(wall)
         stops += 1
-        if stops > 1000:
-            fail("the run did not finish in 1000 resumes")
-        p = run([program, "--resume", wall, "--quiet"], [0, 5])
+        # after STOPS stops the last resume lifts the limit: more stops would cost process starts, not checks
+        p = run([program, "--resume", wall, "--quiet", *(["--max-wall", "0"] if stops == STOPS else [])], [0, 5])
+        if stops > STOPS:
+            fail(f"the run stopped again after its limit was lifted at the {STOPS}th resume")
     if stops == 0:
         fail(f"--max-wall down to {limit:g} never stopped the run: nothing was resumed")
     compare(whole, wall)
+    return stops
 
+
+def resume_after_signal(base, program, whole, sig):
+    """Stopped by SIGINT once its first checkpoint is written, then resumed."""
     proc = subprocess.Popen([*base, "--overwrite", "--out", sig], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True)
     while proc.poll() is None and not os.path.exists(os.path.join(sig, "checkpoint.h5")):
@@ -147,7 +171,9 @@ def main():
         fail(f"the run sent SIGINT exited {proc.returncode}: {err.strip()}")
     compare(whole, sig)
 
-    killed = os.path.join(out, "killed")  # SIGKILL: no handler runs; the last whole checkpoint resumes
+
+def resume_after_kill(base, program, whole, killed):
+    """SIGKILL: no handler runs; the last whole checkpoint resumes."""
     proc = subprocess.Popen([*base, "--overwrite", "--out", killed], stdout=subprocess.DEVNULL,
                             stderr=subprocess.DEVNULL)
     while proc.poll() is None and not os.path.exists(os.path.join(killed, "checkpoint.h5")):
@@ -158,8 +184,6 @@ def main():
         run([program, "--resume", killed, "--quiet", "--max-wall", "0"], [0])
         no_partial(killed)
         compare(whole, killed)
-    print(f"check_resume: {os.path.basename(program)} resumed {stops} times after --max-wall and once after "
-          f"SIGINT and SIGKILL; every snapshot, curve and figure equals the run left alone")
 
 
 if __name__ == "__main__":
