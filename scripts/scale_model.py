@@ -32,9 +32,11 @@ C_RSPH = (6.53 - 0.646) / (119 * 32768)  # RSPH's SPH step
 REMAP = 0.646 / 4 / 32768        # seconds per particle per remap (first order, cubic lattice)
 STEPS_PER_REMAP = 119 / 4
 BYTES_PER_HALO = 155.0           # measured: 2.97e6 bytes per step for 19 200 halo particles (n = 40, P = 2)
-EXCHANGES = 15                   # per step: 9 field exchanges for the halos, 6 refreshed
+EXCHANGES = 3                    # per step, measured (summary.json's exchanges_per_step: 2.1 SPH, 3.3 RSPH, 3D
+                                 # blast at 2 ranks): a halo build and a refresh, each one message whatever the fields
 NEIGHBOURS = 26                  # the ranks a rank trades with (a cube's face, edge and corner neighbours)
-REDUCTIONS = 23                  # per step: balance (2), time step, h_max (2), fits, due, check, totals (14)
+REDUCTIONS = 12                  # per step, measured (collectives_per_step: 12.2 SPH, 11.6 RSPH): balance (2), time
+                                 # step, h_max, the bounds, the h solver's fits, due, check, totals (2)
 REMAP_CELLS_IN_H = 6             # a remap builds the old cells of its own particles and of others within 6 h
 REMAP_HALO_IN_H = 12             # and gathers every particle within 12 h (the generators those cells need)
 OWNER_HALO_IN_H = 4              # by owners: gathers within 4 h (DecompositionParams::owner_reach_in_h)

@@ -88,7 +88,8 @@ class ConservationLog {
 
 /// How a decomposed run shared its work (on more than one rank): ranks, the halos' sizes against the particles'
 /// (and how often the remap by owners gathered farther), the bytes the ranks sent each other per step, the most
-/// wall seconds a rank spent communicating (or waiting for the others), and the ranks a rank messaged per exchange.
+/// wall seconds a rank spent communicating (or waiting for the others), the ranks a rank messaged per exchange, and
+/// the exchanges and the reductions per step (each a message latency).
 template <class Sim>
 void write_ranks(io::Json& summary, const Sim& sim) {
   const auto& d = sim.domain();
@@ -106,6 +107,10 @@ void write_ranks(io::Json& summary, const Sim& sim) {
   summary.set("messages_per_exchange",
               static_cast<double>(d.sum(d.comm().messages())) /
                   static_cast<double>(std::max<std::uint64_t>(1, d.sum(d.comm().exchanges()))));
+  // exchanges are collective: every rank counts the same, each paying a message latency per neighbour rank
+  const double steps = std::max<double>(1, static_cast<double>(sim.steps()));
+  summary.set("exchanges_per_step", static_cast<double>(d.comm().exchanges()) / steps);
+  summary.set("collectives_per_step", static_cast<double>(d.comm().collectives()) / steps);
 }
 
 /// What a run cost, recorded the same way by every scene's run loop: begin(), count_steps() after each

@@ -410,12 +410,20 @@ class Simulation {
   void refresh_halos() requires distributed {
     if (!on_many_ranks()) return;
     auto& d = domain_to_change();
-    d.refresh_halos(p_.rho);
-    d.refresh_halos(p_.P);
-    d.refresh_halos(p_.cs);
-    d.refresh_halos(p_.h);
-    if constexpr (has_energy) d.refresh_halos(p_.u);
-    if constexpr (grad_h) d.refresh_halos(gradh_.Omega);
+    const auto energy = [&] {
+      if constexpr (has_energy)
+        return std::tie(p_.u);
+      else
+        return std::tuple<>();
+    };
+    const auto omega = [&] {
+      if constexpr (grad_h)
+        return std::tie(gradh_.Omega);
+      else
+        return std::tuple<>();
+    };
+    std::apply([&](auto&... f) { d.refresh_halos(f...); },
+               std::tuple_cat(std::tie(p_.rho, p_.P, p_.cs, p_.h), energy(), omega()));  // one message a rank
     boundary::refresh_ghosts(p_);
     if constexpr (has_pressure)
       for (std::size_t g = p_.n_real; g < p_.size_with_ghosts(); ++g)
@@ -587,7 +595,7 @@ class Simulation {
       h_median_ = n > 0 ? h_scratch_[n / 2] : h_max;
     }
     if constexpr (distributed)
-      domain_to_change().make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
+      domain_to_change().make_ghosts(p_, box_, Kernel::support * h_max_ * margin, h_max_);
     else
       boundary::make_ghosts(p_, box_, Kernel::support * h_max_ * margin);
     cells_.build(p_.x, 0.5 * Kernel::support * h_median_ * margin);

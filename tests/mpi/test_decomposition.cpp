@@ -212,8 +212,11 @@ TEST_CASE(
   auto p = all;
   d.distribute(p);
   d.balance(p, {});
+  const auto built_after = d.comm().exchanges();
   d.make_ghosts(p, box, width);
   INFO("partition " << method);
+  const std::uint64_t one = world().size() > 1 ? 1 : 0;
+  CHECK(d.comm().exchanges() == built_after + one);  // every field of the halos in one message from each rank
   // for each real particle: how many points (real or ghost) lie within width, and their summed offsets
   const auto near = [&](const ParticleSet<2, false>& q, const Vec<2>& x) {
     int n = 0;
@@ -236,6 +239,22 @@ TEST_CASE(
   CHECK(mismatches == 0);
   CHECK(world().sum(std::uint64_t(p.n_real)) == 2000u);
   if (world().size() > 1) CHECK(world().sum(d.counts().halo_points) > 0u);
+
+  // a refresh of three fields (of two types) is one exchange, and puts each owner's values on its halos
+  const auto f = [](const Vec<2>& x) { return x[0] + 2.0 * x[1]; };
+  std::vector<std::uint64_t> tag(p.size_with_ghosts(), 0);
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    p.rho[a] = f(p.x[a]);
+    p.P[a] = 3.0 * f(p.x[a]);
+    tag[a] = std::uint64_t(1e9 * f(p.x[a]));
+  }
+  const auto refreshed_after = d.comm().exchanges();
+  d.refresh_halos(p.rho, p.P, tag);
+  CHECK(d.comm().exchanges() == refreshed_after + one);
+  int wrong = 0;
+  for (std::size_t g = p.n_real; g < p.n_real + d.counts().halo_points; ++g)
+    wrong += p.rho[g] != f(p.x[g]) || p.P[g] != 3.0 * f(p.x[g]) || tag[g] != std::uint64_t(1e9 * f(p.x[g]));
+  CHECK(wrong == 0);
 }
 
 namespace {

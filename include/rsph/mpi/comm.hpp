@@ -71,7 +71,8 @@ class Comm {
         owned_(std::exchange(o.owned_, false)),
         seconds_(o.seconds_),
         exchanges_(o.exchanges_),
-        messages_(o.messages_) {}
+        messages_(o.messages_),
+        collectives_(o.collectives_) {}
   Comm& operator=(Comm&& o) noexcept {
     if (this != &o) {
       release();
@@ -99,11 +100,14 @@ class Comm {
   /// The exchanges made so far, and the messages this rank sent in them (one to each rank it had data for).
   std::uint64_t exchanges() const { return exchanges_; }
   std::uint64_t messages() const { return messages_; }
+  /// The reductions and all-gathers made so far (each a latency of about log2 P messages).
+  std::uint64_t collectives() const { return collectives_; }
 
   template <class T>
   T all_reduce(T value, MPI_Op op) const {
     const Timer t(seconds_);
     T out{};
+    ++collectives_;
     check(MPI_Allreduce(&value, &out, 1, datatype<T>(), op, c_), "MPI_Allreduce");
     return out;
   }
@@ -113,12 +117,18 @@ class Comm {
   bool any(bool v) const { return all_reduce(int(v), MPI_LOR) != 0; }
   bool all(bool v) const { return all_reduce(int(v), MPI_LAND) != 0; }
 
+  /// Element-wise reduction (MPI_SUM, MPI_MAX, ...) of a span in place, in one message.
+  template <class T>
+  void reduce_in_place(std::span<T> values, MPI_Op op) const {
+    const Timer t(seconds_);
+    ++collectives_;
+    check(MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), datatype<T>(), op, c_),
+          "MPI_Allreduce");
+  }
   /// Element-wise sums of a span in place (integers: exact in any order).
   template <class T>
   void sum_in_place(std::span<T> values) const {
-    const Timer t(seconds_);
-    check(MPI_Allreduce(MPI_IN_PLACE, values.data(), static_cast<int>(values.size()), datatype<T>(), MPI_SUM, c_),
-          "MPI_Allreduce");
+    reduce_in_place(values, MPI_SUM);
   }
 
   /// Adds the ranks' partial sums, which must share their exponent; every rank gets the same bits.
@@ -129,6 +139,7 @@ class Comm {
   std::vector<T> all_gather(std::span<const T> mine) const {
     const Timer t(seconds_);
     std::vector<T> out(mine.size() * static_cast<std::size_t>(size()));
+    ++collectives_;
     check(MPI_Allgather(mine.data(), static_cast<int>(mine.size()), datatype<T>(), out.data(),
                         static_cast<int>(mine.size()), datatype<T>(), c_),
           "MPI_Allgather");
@@ -214,7 +225,7 @@ class Comm {
   MPI_Comm c_;
   bool owned_ = false;
   mutable double seconds_ = 0.0;
-  mutable std::uint64_t exchanges_ = 0, messages_ = 0;
+  mutable std::uint64_t exchanges_ = 0, messages_ = 0, collectives_ = 0;
 };
 
 }  // namespace rsph::mpi

@@ -18,12 +18,16 @@
 #include "rsph/neighbors/cell_list.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <memory>
 #include <span>
+#include <tuple>
 #include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace rsph::mpi {
@@ -191,6 +195,44 @@ struct Parts<Eigen::Matrix<double, R, C, O, MR, MC>> {  // vectors and matrices,
   using Scalar = double;
   static constexpr int n = R * C;
 };
+
+/// A field's entry in a message: its bytes in whole 8-byte words (a byte takes one word, a Vec<3> three).
+template <class T>
+constexpr std::size_t words = (sizeof(typename Parts<T>::Scalar) * Parts<T>::n + 7) / 8;
+template <class T>
+const void* bytes_of(const T& v) {
+  if constexpr (std::is_arithmetic_v<T>)
+    return &v;
+  else
+    return v.data();
+}
+template <class T>
+void* bytes_of(T& v) {
+  if constexpr (std::is_arithmetic_v<T>)
+    return &v;
+  else
+    return v.data();
+}
+/// Writes v at w (its padding bytes left as they are); returns the words written.
+template <class T>
+std::size_t store(const T& v, std::uint64_t* w) {
+  std::memcpy(w, bytes_of(v), sizeof(typename Parts<T>::Scalar) * Parts<T>::n);
+  return words<T>;
+}
+/// Reads v from r; returns the words read.
+template <class T>
+std::size_t load(T& v, const std::uint64_t* r) {
+  std::memcpy(bytes_of(v), r, sizeof(typename Parts<T>::Scalar) * Parts<T>::n);
+  return words<T>;
+}
+/// f(std::get<i>(a), std::get<i>(b)) for every i of two tuples of one size.
+template <class A, class B, class F>
+void each_pair(A&& a, B&& b, F&& f) {
+  constexpr std::size_t n = std::tuple_size_v<std::remove_cvref_t<A>>;
+  static_assert(n == std::tuple_size_v<std::remove_cvref_t<B>>, "each_pair: two tuples of one size");
+  [&]<std::size_t... I>(std::index_sequence<I...>) { (f(std::get<I>(a), std::get<I>(b)), ...); }
+  (std::make_index_sequence<n>{});
+}
 }  // namespace detail
 
 /// Can any point of [lo1, hi1] lie within [lo2, hi2]? No where their intervals miss on an axis that is not
@@ -301,11 +343,10 @@ class Decomposition {
     for (std::size_t a = 0; a < p.n_real; ++a)
       (dest[a] == me ? stay : out[static_cast<std::size_t>(dest[a])]).push_back(static_cast<std::uint32_t>(a));
     counts_.migrated += p.n_real - stay.size();
-    const auto move = [&](auto& f) { f = concat(gather(f, stay), send(f, out)); };
-    move(p.m), move(p.rho), move(p.h), move(p.P), move(p.cs), move(p.x), move(p.v), move(p.dv_dt);
-    if constexpr (E) move(p.u), move(p.du_dt);
-    move(p.frozen), move(p.id);
-    (move(extra), ...);
+    const auto fields = std::tuple_cat(std::tie(p.m, p.rho, p.h, p.P, p.cs, p.x, p.v, p.dv_dt), energy_fields(p),
+                                       std::tie(p.frozen, p.id), std::tie(extra...));
+    detail::each_pair(fields, send_tied(fields, out),
+                      [&](auto& f, const auto& in) { f = concat(gather(f, stay), in); });
     p.n_real = p.x.size();
     p.next_id = comm_->all_reduce(p.next_id, MPI_MAX);
   }
@@ -313,21 +354,31 @@ class Decomposition {
   /// The ghosts of every point this rank needs: the real particles of other ranks within reach of its own, or
   /// whose reach its own are in (reach: `width` for the largest h, in proportion for the others; across periodic
   /// faces too), appended first, then the periodic and mirror images of boundary::add_images
-  /// of real particles and halos. One rank: boundary::make_ghosts itself.
+  /// of real particles and halos. One rank: boundary::make_ghosts itself. h_max: every rank's largest h, when the
+  /// caller has it (else one more reduction finds it).
   template <bool E>
-  void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width) {
+  void make_ghosts(ParticleSet<D, E>& p, const Box<D>& box, double width, double h_max = -1.0) {
     p.clear_ghosts();
-    if (ranks() > 1) (void)receive_halos(p, box, width, true);
+    if (ranks() > 1) {
+      if (h_max < 0.0) {
+        h_max = 0.0;
+        for (std::size_t a = 0; a < p.n_real; ++a) h_max = std::max(h_max, p.h[a]);
+        h_max = max(h_max);
+      }
+      (void)receive_halos(p, box, width, h_max);
+    }
     counts_.halo_points = halo_count_;
     boundary::add_images(p, box, width);
   }
 
-  /// After a pass has changed field f on the real particles: its values on this rank's halos.
-  template <class T>
-  void refresh_halos(std::vector<T>& f) const {
+  /// After a pass has changed the fields f... on the real particles: their values on this rank's halos, all in
+  /// one message from each rank.
+  template <class... T>
+  void refresh_halos(std::vector<T>&... f) const {
     if (ranks() == 1) return;
-    const auto in = send(f, halo_send_);
-    std::copy(in.begin(), in.end(), f.begin() + static_cast<std::ptrdiff_t>(halo_first_));
+    detail::each_pair(std::tie(f...), send(halo_send_, nullptr, f...), [&](auto& field, const auto& in) {
+      std::copy(in.begin(), in.end(), field.begin() + static_cast<std::ptrdiff_t>(halo_first_));
+    });
   }
 
   /// Before a remap: the real particles of other ranks within `width` of this rank's own, appended after them
@@ -337,12 +388,12 @@ class Decomposition {
   std::size_t add_remap_halo(ParticleSet<D, E>& p, const Box<D>& box, double width) {
     const std::size_t n_own = p.n_real;
     if (ranks() == 1) return n_own;
-    const auto bounds = receive_halos(p, box, width, false);  // as ghosts first, then made real
+    const auto bounds = receive_halos(p, box, width, 0.0);  // as ghosts first, then made real
     counts_.remap_halo_points = halo_count_;
     p.id.resize(n_own);
     p.id.insert(p.id.end(), halo_count_, 0);
     std::vector<int> from;
-    const auto ids = send(std::vector<std::uint64_t>(p.id.begin(), p.id.begin() + n_own), halo_send_, &from);
+    const auto [ids] = send(halo_send_, &from, std::vector<std::uint64_t>(p.id.begin(), p.id.begin() + n_own));
     std::copy(ids.begin(), ids.end(), p.id.begin() + static_cast<std::ptrdiff_t>(n_own));
     remap_rank_.assign(n_own, comm_->rank());
     for (std::size_t q = 0; q < from.size(); ++q) remap_rank_.insert(remap_rank_.end(), std::size_t(from[q]), int(q));
@@ -447,16 +498,13 @@ class Decomposition {
     for (auto& list : to)
       for (std::size_t a = 0; a < p.n_real; ++a) list.push_back(static_cast<std::uint32_t>(a));
     ParticleSet<D, E> all;
-    all.m = send(p.m, to);
-    all.x = send(p.x, to);
-    all.v = send(p.v, to);
-    all.h = send(p.h, to);
-    all.rho = send(p.rho, to);
-    all.P = send(p.P, to);
-    all.cs = send(p.cs, to);
-    if constexpr (E) all.u = send(p.u, to);
-    all.frozen = send(p.frozen, to);
-    all.id = send(p.id, to);
+    const auto fields = [](auto& q) {
+      if constexpr (E)
+        return std::tie(q.m, q.x, q.v, q.h, q.rho, q.P, q.cs, q.frozen, q.id, q.u);
+      else
+        return std::tie(q.m, q.x, q.v, q.h, q.rho, q.P, q.cs, q.frozen, q.id);
+    };
+    detail::each_pair(fields(all), send_tied(fields(p), to), [](auto& f, auto& in) { f = std::move(in); });
     all.n_real = all.x.size();
     all.dv_dt.assign(all.n_real, Vec<D>::Zero());
     if constexpr (E) all.du_dt.assign(all.n_real, 0.0);
@@ -473,9 +521,10 @@ class Decomposition {
   using Lists = std::vector<std::vector<std::uint32_t>>;
 
   /// Appends the halos; returns every rank's bounds it chose them by (4 D numbers a rank: lo, hi of its
-  /// particles, lo, hi of their reaches).
+  /// particles, lo, hi of their reaches). h_max > 0: a particle reaches width h / h_max (h_max: every rank's
+  /// largest h); else every particle reaches `width`.
   template <bool E>
-  std::vector<double> receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, bool per_particle);
+  std::vector<double> receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, double h_max);
 
   /// Where the local set holds every particle, after gathering the others' within `width` of this rank's own:
   /// the own particles' bounds widened by it, unbounded on an axis where they pass every rank's particles' bounds
@@ -513,34 +562,41 @@ class Decomposition {
     return a;
   }
 
-  /// f[a] for every a of lists[q], to rank q; what the other ranks sent here, in rank order (with how many each
-  /// sent, when asked for).
-  template <class T>
-  std::vector<T> send(const std::vector<T>& f, const Lists& lists, std::vector<int>* from = nullptr) const {
-    using S = typename detail::Parts<T>::Scalar;
-    constexpr int k = detail::Parts<T>::n;
-    std::vector<std::vector<S>> out(lists.size());
+  /// The fields f... of every particle a of lists[q], to rank q, in one message per rank (particle by particle,
+  /// each entry in whole words: detail::words); what the other ranks sent here, in rank order, field by field
+  /// (with how many particles each sent, when asked for).
+  template <class... T>
+  std::tuple<std::vector<T>...> send(const Lists& lists, std::vector<int>* from, const std::vector<T>&... f) const {
+    constexpr std::size_t stride = (detail::words<T> + ...);
+    std::vector<std::vector<std::uint64_t>> out(lists.size());
     for (std::size_t q = 0; q < lists.size(); ++q) {
-      out[q].reserve(lists[q].size() * k);
-      for (auto a : lists[q]) {
-        if constexpr (std::is_same_v<T, S>)
-          out[q].push_back(f[a]);
-        else
-          for (int j = 0; j < k; ++j) out[q].push_back(f[a].data()[j]);
-      }
-      counts_.bytes_sent += out[q].size() * sizeof(S);
+      out[q].resize(lists[q].size() * stride);
+      std::uint64_t* w = out[q].data();
+      for (auto a : lists[q]) ((w += detail::store(f[a], w)), ...);
+      counts_.bytes_sent += out[q].size() * sizeof(std::uint64_t);
     }
     const auto in = comm_->exchange(out, from);
     if (from)
-      for (auto& n : *from) n /= k;
-    std::vector<T> r(in.size() / k);
-    for (std::size_t i = 0; i < r.size(); ++i) {
-      if constexpr (std::is_same_v<T, S>)
-        r[i] = in[i];
-      else
-        for (int j = 0; j < k; ++j) r[i].data()[j] = in[k * i + static_cast<std::size_t>(j)];
-    }
-    return r;
+      for (auto& n : *from) n /= static_cast<int>(stride);
+    const std::size_t n = in.size() / stride;
+    std::tuple<std::vector<T>...> got{std::vector<T>(n)...};
+    const std::uint64_t* r = in.data();
+    for (std::size_t i = 0; i < n; ++i)
+      std::apply([&](auto&... field) { ((r += detail::load(field[i], r)), ...); }, got);
+    return got;
+  }
+  /// send of a tuple of fields (std::tie).
+  template <class Fields>
+  auto send_tied(const Fields& fields, const Lists& lists) const {
+    return std::apply([&](const auto&... f) { return send(lists, nullptr, f...); }, fields);
+  }
+  /// The fields of a set with internal energy that move with a particle beside the others (none without).
+  template <bool E>
+  static auto energy_fields(ParticleSet<D, E>& p) {
+    if constexpr (E)
+      return std::tie(p.u, p.du_dt);
+    else
+      return std::tuple<>();
   }
 
   std::shared_ptr<Comm> comm_;  // shared: a Simulation copies its terms
@@ -559,14 +615,11 @@ class Decomposition {
 template <int D>
 template <bool E>
 std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width,
-                                                    bool per_particle) {
+                                                    double h_max) {
   // A pair interacts within support max(h_a, h_b) (times the search margin), so particle a reaches
   // R_a = width h_a / h_max: each rank's bounds, of its particles and of their reaches, go to every rank; a
-  // particle goes to a rank whose reach holds it or whose particles it reaches. Without per_particle, R = width.
-  double h_max = 0.0;
-  for (std::size_t a = 0; a < p.n_real; ++a) h_max = std::max(h_max, p.h[a]);
-  h_max = max(h_max);
-  const auto reach = [&](std::size_t a) { return per_particle && h_max > 0.0 ? width * p.h[a] / h_max : width; };
+  // particle goes to a rank whose reach holds it or whose particles it reaches. Without h_max, R = width.
+  const auto reach = [&](std::size_t a) { return h_max > 0.0 ? width * p.h[a] / h_max : width; };
   constexpr double inf = std::numeric_limits<double>::infinity();
   std::vector<double> mine(4 * D);  // lo, hi of the particles; lo, hi of their reaches (empty for none)
   for (int k = 0; k < D; ++k) mine[k] = mine[2 * D + k] = inf, mine[D + k] = mine[3 * D + k] = -inf;
@@ -597,26 +650,20 @@ std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const 
         halo_send_[static_cast<std::size_t>(q)].push_back(std::uint32_t(a));
     }
   }
-  const auto x = send(p.x, halo_send_);
+  const auto fields = [&] {
+    if constexpr (E)
+      return std::tie(p.x, p.v, p.m, p.h, p.rho, p.P, p.cs, p.frozen, p.u);
+    else
+      return std::tie(p.x, p.v, p.m, p.h, p.rho, p.P, p.cs, p.frozen);
+  }();
   halo_first_ = p.n_real;
-  halo_count_ = x.size();
-  const auto put = [&](auto& f, const auto& values) {
+  detail::each_pair(fields, send_tied(fields, halo_send_), [&](auto& f, const auto& values) {
     f.resize(halo_first_);
     f.insert(f.end(), values.begin(), values.end());
-  };
-  put(p.x, x);
-  put(p.v, send(p.v, halo_send_));
-  put(p.m, send(p.m, halo_send_));
-  put(p.h, send(p.h, halo_send_));
-  put(p.rho, send(p.rho, halo_send_));
-  put(p.P, send(p.P, halo_send_));
-  put(p.cs, send(p.cs, halo_send_));
-  put(p.frozen, send(p.frozen, halo_send_));
+  });
+  halo_count_ = p.x.size() - halo_first_;
   p.dv_dt.resize(p.x.size(), Vec<D>::Zero());
-  if constexpr (E) {
-    put(p.u, send(p.u, halo_send_));
-    p.du_dt.resize(p.x.size(), 0.0);
-  }
+  if constexpr (E) p.du_dt.resize(p.x.size(), 0.0);
   for (std::size_t g = 0; g < halo_count_; ++g) p.ghost_source.push_back(std::uint32_t(halo_first_ + g));
   return all;
 }
@@ -634,14 +681,24 @@ Conservation<D> Decomposition<D>::totals(const ParticleSet<D, E>& p) const {
     terms[2 + D].push_back(0.5 * p.m[a] * p.v[a].squaredNorm());
     if constexpr (E) terms[3 + D].push_back(p.m[a] * p.u[a]);
   }
+  // two reductions for all the sums: their largest terms, then their limbs
+  std::array<double, n_sums> largest{};
+  for (int i = 0; i < n_sums; ++i)
+    for (double t : terms[i]) largest[i] = std::max(largest[i], std::abs(t));
+  if (ranks() > 1) comm_->reduce_in_place(std::span<double>(largest), MPI_MAX);
+  constexpr std::size_t L = ExactSum::kLimbs;
+  std::vector<ExactSum> partial;
+  std::vector<std::int64_t> limbs;
+  for (int i = 0; i < n_sums; ++i) {
+    ExactSum& s = partial.emplace_back(ExactSum::exponent_for(largest[i]));
+    for (double t : terms[i]) s.add(t);
+    limbs.insert(limbs.end(), s.limbs().begin(), s.limbs().end());
+  }
+  if (ranks() > 1) comm_->sum_in_place(std::span<std::int64_t>(limbs));
   std::vector<double> sums(n_sums);
   for (int i = 0; i < n_sums; ++i) {
-    double largest = 0.0;
-    for (double t : terms[i]) largest = std::max(largest, std::abs(t));
-    ExactSum s(ExactSum::exponent_for(max(largest)));
-    for (double t : terms[i]) s.add(t);
-    if (ranks() > 1) comm_->sum_in_place(s);
-    sums[i] = s.value();
+    std::copy_n(limbs.begin() + static_cast<std::ptrdiff_t>(L * i), L, partial[i].limbs().begin());
+    sums[i] = partial[i].value();
   }
   Conservation<D> c;
   c.mass = sums[0];
