@@ -30,7 +30,7 @@ std::vector<Point> jittered(int n, double jitter, unsigned seed, double shear = 
 std::vector<double> brute_force_areas(const std::vector<Point>& x, const Box<2>& box) {
   std::vector<double> out;
   for (std::size_t a = 0; a < x.size(); ++a) {
-    ConvexPolygon cell = detail::initial_cell(x[a], box, 1.0, 0.0);
+    ConvexPolygon cell = geometry::detail::initial_cell(x[a], box, 1.0, 0.0);
     for (std::size_t b = 0; b < x.size(); ++b)
       for (int ix = -1; ix <= 1; ++ix)
         for (int iy = -1; iy <= 1; ++iy) {
