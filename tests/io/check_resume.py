@@ -128,7 +128,7 @@ def main():
     if "killed" in ways:
         resume_after_kill(base, program, whole, os.path.join(out, "killed"))
     done = " and ".join(name for way, name in (("signal", "SIGINT"), ("killed", "SIGKILL")) if way in ways)
-    print(f"check_resume: {os.path.basename(program)} resumed {stops} times after --max-wall"
+    print(f"check_resume: {os.path.basename(program)} resumed {stops} time{'' if stops == 1 else 's'} after --max-wall"
           f"{' and once after ' + done if done else ''}; every snapshot, curve and figure equals the run left alone")
 
 
