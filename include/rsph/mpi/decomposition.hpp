@@ -199,16 +199,10 @@ struct Parts<Eigen::Matrix<double, R, C, O, MR, MC>> {  // vectors and matrices,
 /// A field's entry in a message: its bytes in whole 8-byte words (a byte takes one word, a Vec<3> three).
 template <class T>
 constexpr std::size_t words = (sizeof(typename Parts<T>::Scalar) * Parts<T>::n + 7) / 8;
+/// Where an entry's bytes start (T const or not).
 template <class T>
-const void* bytes_of(const T& v) {
-  if constexpr (std::is_arithmetic_v<T>)
-    return &v;
-  else
-    return v.data();
-}
-template <class T>
-void* bytes_of(T& v) {
-  if constexpr (std::is_arithmetic_v<T>)
+auto* bytes_of(T& v) {
+  if constexpr (std::is_arithmetic_v<std::remove_const_t<T>>)
     return &v;
   else
     return v.data();
