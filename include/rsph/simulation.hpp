@@ -25,6 +25,7 @@
 #include "rsph/physics/loops/stress.hpp"
 #include "rsph/physics/smoothing_length.hpp"
 #include "rsph/regularize/concept.hpp"
+#include "rsph/regularize/remap_on_ranks.hpp"
 
 #include <algorithm>
 #include <array>
@@ -329,72 +330,10 @@ class Simulation {
       return false;
   }
 
-  /// The remap on many ranks: each rank remaps its own particles with those of other ranks out to the remap's
-  /// reach, keeps the new particles whose site its own gas held, and checks that the mass over all ranks is
-  /// what it was (a reach too short would lose or double some). A regularizer that remaps by owners builds the
-  /// cells of this rank's own particles only and completes the new cells' sums with the other ranks' parts; it
-  /// gathers the others' particles out to a short reach, and half as far again, on every rank, where some rank's
-  /// cells reach beyond (Decomposition::gather_farther). The others build the cells of the other ranks' particles near
-  /// this rank's too, and drop the new particles that another rank keeps.
+  /// The remap on many ranks (regularize/remap_on_ranks.hpp).
   void remap_on_ranks() requires distributed {
-    constexpr bool by_owners = regularize::remaps_by_owners<Reg>();
-    auto& d = domain_to_change();
-    const auto before = totals();
-    double h_max = 0.0;
-    for (std::size_t a = 0; a < p_.n_real; ++a) h_max = std::max(h_max, p_.h[a]);
-    h_max = d.max(h_max);
-    if constexpr (by_owners) {
-      for (;;) {
-        const std::size_t n_own = d.add_remap_halo(p_, box_, d.owner_reach_in_h() * h_max);
-        try {
-          remap_part(n_own, h_max);
-          break;
-        } catch (const HaloTooNarrow&) {  // raised on every rank at once, before any particle changed
-          d.gather_farther(p_, n_own);
-        }
-      }
-      d.renumber(p_);  // the remap emitted only the cells this rank keeps
-    } else {
-      const std::size_t n_own = d.add_remap_halo(p_, box_, d.remap_reach_in_h() * h_max);
-      const auto owners = remap_part(n_own, h_max, d.remap_cells(p_, box_, n_own, 0.5 * d.remap_reach_in_h() * h_max));
-      d.keep_owned_sites(p_, owners);
-    }
-    const auto after = totals();
-    if (!(std::abs(after.mass - before.mass) <= 1e-12 * before.mass))
-      throw NumericalError("the remap on " + std::to_string(d.ranks()) + " ranks changed the mass by " +
-                           std::to_string(after.mass / before.mass - 1.0) + ": its reach is too short");
-    kinetic_removed_ += before.kinetic - after.kinetic;
-  }
-
-  /// One rank's part of the remap, after add_remap_halo: the cells of `cells` (this rank's own n_own when empty)
-  /// built and remapped; returns which rank keeps each new site.
-  auto remap_part(std::size_t n_own, double h_max, std::vector<std::uint32_t> cells = {}) requires distributed {
-    auto& d = domain_to_change();
-    if (cells.empty()) {
-      cells.resize(n_own);
-      std::iota(cells.begin(), cells.end(), 0u);
-    }
-    auto owners = d.site_owners(p_, box_, n_own, Kernel::support * h_max);
-    auto info = step_info();
-    auto& part = info.part;
-    part.cells = cells;
-    part.max_over_ranks = [&d](double v) { return d.max(v); };
-    part.owns = [&owners](std::span<const double> sites) { return owners.owns(sites); };
-    part.sum_over_ranks = [&d](std::span<double> v) { d.sum_in_place(v); };
-    part.own = n_own;
-    if constexpr (regularize::remaps_by_owners<Reg>()) {
-      part.owner_of = [&owners](std::span<const double> sites) { return owners.owners(sites); };
-      part.exchange = [&d](const std::vector<std::vector<double>>& out, std::vector<int>* counts) {
-        return d.exchange(out, counts);
-      };
-      part.encloses = [&d](std::span<const double> x, double r) {
-        return d.gathered().encloses(Eigen::Map<const Vec<D>>(x.data()), r);
-      };
-      part.rank = d.comm().rank();
-      part.ranks = d.ranks();
-    }
-    reg_.remap(p_, box_, info);
-    return owners;
+    kinetic_removed_ +=
+        regularize::remap_on_ranks(domain_to_change(), p_, box_, reg_, step_info(), double(Kernel::support));
   }
 
   /// The viscous stress of every real particle; on many ranks the halos' from their owners; then the images'.
@@ -637,13 +576,11 @@ class Simulation {
   }
 
   void check_physical() const {
-    const auto [a, what] = first_unphysical(p_);
+    const std::string what = unphysical_after(p_, time_, step_);
     if constexpr (distributed)  // every rank stops together
       if (domain().any(!what.empty()) && what.empty())
         throw NumericalError("a particle of another rank became unphysical at t = " + std::to_string(time_));
-    if (!what.empty())
-      throw NumericalError("particle " + std::to_string(a) + ": " + what + " at t = " + std::to_string(time_) +
-                           " (step " + std::to_string(step_) + ")");
+    if (!what.empty()) throw NumericalError(what);
   }
 
   Particles p_;

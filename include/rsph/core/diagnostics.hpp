@@ -5,6 +5,7 @@
 #include "rsph/core/particle_set.hpp"
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -46,6 +47,16 @@ std::pair<std::size_t, std::string> first_unphysical(const ParticleSet<D, E>& p)
       if (!std::isfinite(p.u[a]) || p.u[a] < 0.0) return {a, "internal energy is negative or not finite"};
   }
   return {std::numeric_limits<std::size_t>::max(), ""};
+}
+
+/// What is unphysical about the particles of `p` after step `step` at time t: the first such particle and its
+/// field, in words; empty when all is well.
+template <int D, bool E>
+std::string unphysical_after(const ParticleSet<D, E>& p, double t, std::uint64_t step) {
+  const auto [a, what] = first_unphysical(p);
+  if (what.empty()) return what;
+  return "particle " + std::to_string(a) + ": " + what + " at t = " + std::to_string(t) + " (step " +
+         std::to_string(step) + ")";
 }
 
 /// Initial data a run can start from: particles, no ghosts, a non-empty box, and for every particle a

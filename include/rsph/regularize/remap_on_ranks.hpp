@@ -1,0 +1,95 @@
+#pragma once
+// The remap on many ranks, for a simulation whose scene names a domain decomposition (mpi/decomposition.hpp):
+// what each rank gathers, builds and keeps so that the new particles over all ranks are those of one process.
+// A function of the decomposition, the particle set and the regularizer, not of the kernel: the simulations of
+// one scene with different kernels share its code.
+#include "rsph/core/errors.hpp"
+#include "rsph/core/particle_set.hpp"
+#include "rsph/regularize/concept.hpp"
+
+#include <Eigen/Core>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numeric>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace rsph::regularize {
+
+namespace detail {
+
+/// One rank's part of the remap, after add_remap_halo: the cells of `cells` (this rank's own n_own when empty)
+/// built and remapped; returns which rank keeps each new site. `reach`: the kernel's support times h_max.
+template <class Domain, class Particles, int D, class Reg>
+auto remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo info, std::size_t n_own, double reach,
+                std::vector<std::uint32_t> cells = {}) {
+  if (cells.empty()) {
+    cells.resize(n_own);
+    std::iota(cells.begin(), cells.end(), 0u);
+  }
+  auto owners = d.site_owners(p, box, n_own, reach);
+  auto& part = info.part;
+  part.cells = cells;
+  part.max_over_ranks = [&d](double v) { return d.max(v); };
+  part.owns = [&owners](std::span<const double> sites) { return owners.owns(sites); };
+  part.sum_over_ranks = [&d](std::span<double> v) { d.sum_in_place(v); };
+  part.own = n_own;
+  if constexpr (remaps_by_owners<Reg>()) {
+    part.owner_of = [&owners](std::span<const double> sites) { return owners.owners(sites); };
+    part.exchange = [&d](const std::vector<std::vector<double>>& out, std::vector<int>* counts) {
+      return d.exchange(out, counts);
+    };
+    part.encloses = [&d](std::span<const double> x, double r) {
+      return d.gathered().encloses(Eigen::Map<const Vec<D>>(x.data()), r);
+    };
+    part.rank = d.comm().rank();
+    part.ranks = d.ranks();
+  }
+  reg.remap(p, box, info);
+  return owners;
+}
+
+}  // namespace detail
+
+/// The remap on many ranks: each rank remaps its own particles with those of other ranks out to the remap's
+/// reach, keeps the new particles whose site its own gas held, and checks that the mass over all ranks is what
+/// it was (a reach too short would lose or double some). A regularizer that remaps by owners builds the cells of
+/// this rank's own particles only and completes the new cells' sums with the other ranks' parts; it gathers the
+/// others' particles out to a short reach, and half as far again, on every rank, where some rank's cells reach
+/// beyond (Decomposition::gather_farther). The others build the cells of the other ranks' particles near this
+/// rank's too, and drop the new particles that another rank keeps. `support`: the kernel's, in units of h.
+/// Returns the kinetic energy the remap removed over all ranks.
+template <class Domain, class Particles, int D, class Reg>
+double remap_on_ranks(Domain& d, Particles& p, const Box<D>& box, Reg& reg, const StepInfo& info, double support) {
+  const auto before = d.totals(p);
+  double h_max = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) h_max = std::max(h_max, p.h[a]);
+  h_max = d.max(h_max);
+  if constexpr (remaps_by_owners<Reg>()) {
+    for (;;) {
+      const std::size_t n_own = d.add_remap_halo(p, box, d.owner_reach_in_h() * h_max);
+      try {
+        detail::remap_part(d, p, box, reg, info, n_own, support * h_max);
+        break;
+      } catch (const HaloTooNarrow&) {  // raised on every rank at once, before any particle changed
+        d.gather_farther(p, n_own);
+      }
+    }
+    d.renumber(p);  // the remap emitted only the cells this rank keeps
+  } else {
+    const std::size_t n_own = d.add_remap_halo(p, box, d.remap_reach_in_h() * h_max);
+    const auto owners = detail::remap_part(d, p, box, reg, info, n_own, support * h_max,
+                                           d.remap_cells(p, box, n_own, 0.5 * d.remap_reach_in_h() * h_max));
+    d.keep_owned_sites(p, owners);
+  }
+  const auto after = d.totals(p);
+  if (!(std::abs(after.mass - before.mass) <= 1e-12 * before.mass))
+    throw NumericalError("the remap on " + std::to_string(d.ranks()) + " ranks changed the mass by " +
+                         std::to_string(after.mass / before.mass - 1.0) + ": its reach is too short");
+  return before.kinetic - after.kinetic;
+}
+
+}  // namespace rsph::regularize
