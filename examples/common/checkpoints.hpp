@@ -12,12 +12,14 @@
 #include "rsph/mpi/file_turns.hpp"
 #endif
 
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -43,6 +45,21 @@ inline std::string resumable_parameters(const CommonOptions& common) {
     if (name != "threads" && name != "quiet" && name != "checkpoint-every" && name != "max-wall" && name != "stop-at")
       text += name + " = " + value + "\n";
   return text;
+}
+
+/// What the checkpoints read of a simulation, its type erased so that their code is compiled once and not once
+/// per simulation type: its clock, its own fields (Simulation::checkpoint, for saving and restoring) and, on many
+/// ranks, the communicator through which the ranks decide together and write in turns.
+struct Checkpointed {
+  double time = 0.0;
+  std::uint64_t steps = 0;
+  std::function<void(io::Archive&)> fields;
+  const RankComm* comm = nullptr;  ///< on more than one rank
+};
+
+template <class Sim>
+Checkpointed checkpointed(Sim& sim) {
+  return {sim.time(), sim.steps(), [&sim](io::Archive& ar) { sim.checkpoint(ar); }, comm_of_ranks(sim)};
 }
 
 class Checkpoints;
@@ -103,20 +120,9 @@ class Checkpoints {
   /// for.
   template <class Sim>
   std::size_t restore(Sim& sim, RunCost& cost) {
-    auto ar = io::Archive::load(file_, io::Share{std::size_t(this_rank()), std::size_t(rank_count())});
-    std::string program, parameters;
-    ar("run/program", program);
-    ar("run/parameters", parameters);
-    require(program == program_, "the checkpoint " + file_.string() + " was written by " + program);
-    if (parameters != parameters_)
-      throw InputError("the checkpoint " + file_.string() + " was written with other parameters: " +
-                       first_difference(parameters, parameters_) + "; resume takes the run's own params.cfg");
-    std::size_t stop = 0;
-    ar("run/stop", stop);
-    state(ar, sim, cost);
+    const std::size_t stop = load(checkpointed(sim), cost);
     last_ = index_of(sim.time());
     seen_ = sim.time();  // a resume from --stop-at goes on past it
-    resume_ = false;     // later runs of the same program (the next case of a sweep) start afresh
     return stop;
   }
 
@@ -133,29 +139,7 @@ class Checkpoints {
   /// --stop-at or a signal writes one and throws Stopped.
   template <class Sim>
   void after_step(Sim& sim, std::size_t k, RunCost& cost) {
-    const double index = index_of(sim.time());
-    bool wall = max_wall_ > 0.0 && seconds_since(started_) >= max_wall_;  // this process's time
-    int signal = detail::stop_signal;
-    if constexpr (Sim::distributed)  // every rank writes and stops when one of them would
-      if (rank_count() > 1) {
-        wall = sim.domain().any(wall);
-        signal = static_cast<int>(sim.domain().max(double(signal)));
-      }
-    const double mark = stop_at_ * (1.0 - 1e-12);  // --stop-at: this step passed it (the same on every rank)
-    const bool at = stop_at_ > 0.0 && seen_ < mark && sim.time() >= mark;
-    seen_ = sim.time();
-    if (index > last_ || wall || signal || at) {
-      write(sim, k, cost);
-      last_ = index;
-    }
-    if (!wall && !signal && !at) return;
-    const std::string why = signal == SIGINT    ? "SIGINT"
-                            : signal == SIGTERM ? "SIGTERM"
-                            : wall              ? "--max-wall " + max_wall_text_ + " minutes"
-                                                : "--stop-at " + stop_at_text_;
-    throw Stopped("stopped by " + why + " at t = " + default_text(sim.time()) + " (step " +
-                  std::to_string(sim.steps()) + "); checkpoint written to " + file_.string() + "; continue with `" +
-                  command_ + "`");
+    at_step(checkpointed(sim), k, cost);
   }
 
  private:
@@ -167,24 +151,66 @@ class Checkpoints {
 
   double index_of(double time) const { return every_ > 0.0 ? std::floor(time / every_ * (1.0 + 1e-12)) : 0.0; }
 
-  template <class Sim>
-  void write(Sim& sim, std::size_t k, RunCost& cost) {
+  /// Reads the checkpoint into sim, the cost and every part; returns the stop the run was heading for.
+  std::size_t load(const Checkpointed& sim, RunCost& cost) {
+    auto ar = io::Archive::load(file_, io::Share{std::size_t(this_rank()), std::size_t(rank_count())});
+    std::string program, parameters;
+    ar("run/program", program);
+    ar("run/parameters", parameters);
+    require(program == program_, "the checkpoint " + file_.string() + " was written by " + program);
+    if (parameters != parameters_)
+      throw InputError("the checkpoint " + file_.string() + " was written with other parameters: " +
+                       first_difference(parameters, parameters_) + "; resume takes the run's own params.cfg");
+    std::size_t stop = 0;
+    ar("run/stop", stop);
+    state(ar, sim, cost);
+    resume_ = false;  // later runs of the same program (the next case of a sweep) start afresh
+    return stop;
+  }
+
+  void at_step(const Checkpointed& sim, std::size_t k, RunCost& cost) {
+    const double index = index_of(sim.time);
+    bool wall = max_wall_ > 0.0 && seconds_since(started_) >= max_wall_;  // this process's time
+    int signal = detail::stop_signal;
+#ifdef RSPH_WITH_MPI
+    if (sim.comm) {  // every rank writes and stops when one of them would
+      std::array<double, 2> ask{double(wall), double(signal)};
+      sim.comm->reduce_in_place(std::span<double>(ask), MPI_MAX);
+      wall = ask[0] > 0.0;
+      signal = static_cast<int>(ask[1]);
+    }
+#endif
+    const double mark = stop_at_ * (1.0 - 1e-12);  // --stop-at: this step passed it (the same on every rank)
+    const bool at = stop_at_ > 0.0 && seen_ < mark && sim.time >= mark;
+    seen_ = sim.time;
+    if (index > last_ || wall || signal || at) {
+      write(sim, k, cost);
+      last_ = index;
+    }
+    if (!wall && !signal && !at) return;
+    const std::string why = signal == SIGINT    ? "SIGINT"
+                            : signal == SIGTERM ? "SIGTERM"
+                            : wall              ? "--max-wall " + max_wall_text_ + " minutes"
+                                                : "--stop-at " + stop_at_text_;
+    throw Stopped("stopped by " + why + " at t = " + default_text(sim.time) + " (step " + std::to_string(sim.steps) +
+                  "); checkpoint written to " + file_.string() + "; continue with `" + command_ + "`");
+  }
+
+  void write(const Checkpointed& sim, std::size_t k, RunCost& cost) {
     auto ar = io::Archive::for_saving();
     ar("run/program", program_);
     ar("run/parameters", parameters_);
     ar("run/stop", k);
     state(ar, sim, cost);
 #ifdef RSPH_WITH_MPI
-    if constexpr (Sim::distributed)
-      if (rank_count() > 1) return ar.write(file_, mpi::FileTurns(sim.domain().comm()));
+    if (sim.comm) return ar.write(file_, mpi::FileTurns(*sim.comm));
 #endif
     ar.write(file_);
   }
 
   /// The state itself, the same list for saving and restoring: the simulation, the cost and every part.
-  template <class Sim>
-  void state(io::Archive& ar, Sim& sim, RunCost& cost) {
-    sim.checkpoint(ar);
+  void state(io::Archive& ar, const Checkpointed& sim, RunCost& cost) {
+    sim.fields(ar);
     cost.checkpoint(ar);
     for (auto& [name, fields] : parts_) {
       const auto scope = ar.scope(name);

@@ -91,6 +91,24 @@ inline int rank_count() {
 }
 inline bool on_root() { return this_rank() == 0; }
 
+/// The communicator of a decomposed run's ranks (a build without MPI has none).
+#ifdef RSPH_WITH_MPI
+using RankComm = mpi::Comm;
+#else
+struct RankComm {};
+#endif
+
+/// The communicator of `sim`'s ranks where it runs on more than one, otherwise null: for the code that does the
+/// same for every simulation type (checkpoints, snapshots), so that it is compiled once.
+template <class Sim>
+const RankComm* comm_of_ranks([[maybe_unused]] const Sim& sim) {
+#ifdef RSPH_WITH_MPI
+  if constexpr (Sim::distributed)
+    if (rank_count() > 1) return &sim.domain().comm();
+#endif
+  return nullptr;
+}
+
 /// f(domain) with the decomposition of the ranks, or f() without MPI: a scene's make_ function takes the
 /// decomposition as its last term.
 template <int D, class F>

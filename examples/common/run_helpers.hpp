@@ -15,6 +15,8 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -89,18 +91,18 @@ class ConservationLog {
 /// How a decomposed run shared its work (on more than one rank): ranks, the halos' sizes against the particles'
 /// (and how often the remap by owners gathered farther), the bytes the ranks sent each other per step, the most
 /// wall seconds a rank spent communicating (or waiting for the others), the ranks a rank messaged per exchange, and
-/// the exchanges and the reductions per step (each a message latency).
-template <class Sim>
-void write_ranks(io::Json& summary, const Sim& sim) {
-  const auto& d = sim.domain();
+/// the exchanges and the reductions per step (each a message latency). `n_own`: this rank's particles.
+template <class Domain>
+void write_ranks(io::Json& summary, const Domain& d, std::size_t n_own, std::uint64_t steps_taken) {
   const auto& c = d.counts();
-  const double particles = static_cast<double>(d.sum(sim.particles().n_real));
+  const double particles = static_cast<double>(d.sum(n_own));
   summary.set("ranks", static_cast<std::uint64_t>(d.ranks()));
   if (d.ranks() == 1) return;  // one rank sends nothing
   summary.set("halo_fraction", static_cast<double>(d.sum(c.halo_points)) / particles);
   summary.set("remap_halo_fraction", static_cast<double>(d.sum(c.remap_halo_points)) / particles);
   summary.set("remap_halo_widenings", c.remap_widenings);  // alike on every rank
-  summary.set("bytes_sent_per_step", static_cast<double>(d.sum(c.bytes_sent)) / std::max<double>(1, sim.steps()));
+  const double steps = std::max<double>(1, static_cast<double>(steps_taken));
+  summary.set("bytes_sent_per_step", static_cast<double>(d.sum(c.bytes_sent)) / steps);
   summary.set("particles_migrated", d.sum(c.migrated)).set("partitions", c.partitions);
   summary.set("communication_seconds", d.max(d.communication_seconds()));
   // the ranks a rank sent to in an exchange, on average (an exchange messages only those it has data for)
@@ -108,7 +110,6 @@ void write_ranks(io::Json& summary, const Sim& sim) {
               static_cast<double>(d.sum(d.comm().messages())) /
                   static_cast<double>(std::max<std::uint64_t>(1, d.sum(d.comm().exchanges()))));
   // exchanges are collective: every rank counts the same, each paying a message latency per neighbour rank
-  const double steps = std::max<double>(1, static_cast<double>(sim.steps()));
   summary.set("exchanges_per_step", static_cast<double>(d.comm().exchanges()) / steps);
   summary.set("collectives_per_step", static_cast<double>(d.comm().collectives()) / steps);
 }
@@ -159,7 +160,7 @@ struct RunCost {
     mean_particles = steps > 0 ? particle_steps[0] / static_cast<double>(steps) : 0.0;
     regularizations = sim.regularizations();
     phases = sim.phase_times();
-    if constexpr (Sim::distributed) write_ranks(ranks, sim);
+    if constexpr (Sim::distributed) write_ranks(ranks, sim.domain(), sim.particles().n_real, sim.steps());
   }
 
  private:
@@ -225,8 +226,8 @@ struct GradientSolves {
 /// Particles per resolution level from a regularization log: the counts the last regularization left
 /// and their average over steps (each regularization's counts weighted by the steps until the next).
 /// `sum(values)` adds the values up over the ranks (each rank's log counts the particles it kept).
-template <class Log, class Sum>
-io::Json level_counts(const Log& log, std::uint64_t total_steps, Sum&& sum) {
+template <class Log>
+io::Json level_counts(const Log& log, std::uint64_t total_steps, const std::function<void(std::span<double>)>& sum) {
   io::Json j;
   if (log.empty()) return j;
   const std::size_t n_levels = log.back().stats.per_level.size();

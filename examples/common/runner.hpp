@@ -61,16 +61,17 @@ inline std::vector<AtTime> evenly(double t_end, int n) {
   return stops;
 }
 
-/// Refuses an end time the run could never reach: more than 1e10 steps of the present time step (--t-end
+/// Refuses an end time the run could never reach: more than 1e10 steps of the present time step dt (--t-end
 /// 1e300 would otherwise run until stopped, writing curves all the while).
+inline void check_reachable(double t_end, double time, double dt) {
+  const double steps = (t_end - time) / dt;
+  require(steps < 1e10, "the end time " + default_text(t_end) + " lies " + fmt::format("{:.1e}", steps) + " steps of " +
+                            default_text(dt) + " away: choose a reachable end time");
+}
 template <class Sim, class Stop>
 void check_reachable(const Sim& sim, const std::vector<Stop>& stops) {
-  if constexpr (std::is_same_v<Stop, AtTime>) {
-    if (stops.empty()) return;
-    const double steps = (stops.back().t - sim.time()) / sim.time_step();
-    require(steps < 1e10, "the end time " + default_text(stops.back().t) + " lies " + fmt::format("{:.1e}", steps) +
-                              " steps of " + default_text(sim.time_step()) + " away: choose a reachable end time");
-  }
+  if constexpr (std::is_same_v<Stop, AtTime>)
+    if (!stops.empty()) check_reachable(stops.back().t, sim.time(), sim.time_step());
 }
 
 /// Hooks that do nothing, for a run that needs none.
@@ -106,6 +107,22 @@ RunCost run_stops(Sim& sim, const std::vector<Stop>& stops, AfterStep&& after_st
   return cost;
 }
 
+namespace detail {
+/// The particles `p` at `path`, described by `info`; with `comm`, every rank writes its own into the one file.
+/// A template of the particle set alone, so that simulations of one set share its code.
+template <class Particles>
+void write_particles(const std::filesystem::path& path, const Particles& p, double time, std::uint64_t step,
+                     const io::SnapshotInfo& info, [[maybe_unused]] const RankComm* comm) {
+#ifdef RSPH_WITH_MPI
+  if (comm) {
+    io::write_snapshot(comm->broadcast(path.string()), p, time, step, info, mpi::FileTurns(*comm));
+    return;
+  }
+#endif
+  io::write_snapshot(path, p, time, step, info);
+}
+}  // namespace detail
+
 /// A snapshot of `sim` at `path` with the positions of `objects` (io::write_snapshot); on many ranks every rank
 /// writes its own particles into the one file, together through parallel HDF5 or in turns (mpi::FileTurns).
 template <class Sim>
@@ -113,16 +130,7 @@ void write_snapshot(const std::filesystem::path& path, const Sim& sim, const std
                     std::vector<std::pair<std::string, std::vector<double>>> objects = {}) {
   auto info = io::describe_run(sim.box(), sim.eos(), units);
   info.objects = std::move(objects);
-#ifdef RSPH_WITH_MPI
-  if constexpr (Sim::distributed)
-    if (rank_count() > 1) {
-      const auto& comm = sim.domain().comm();
-      io::write_snapshot(comm.broadcast(path.string()), sim.particles(), sim.time(), sim.steps(), info,
-                         mpi::FileTurns(comm));
-      return;
-    }
-#endif
-  io::write_snapshot(path, sim.particles(), sim.time(), sim.steps(), info);
+  detail::write_particles(path, sim.particles(), sim.time(), sim.steps(), info, comm_of_ranks(sim));
 }
 
 /// The snapshots of a run in `dir`: snap_00000.h5, snap_00001.h5, ... in the order written.
