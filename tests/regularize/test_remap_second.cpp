@@ -282,7 +282,7 @@ TEST_CASE("second-order remap: the neighbours, gradient and limiter against brut
   }
   SECTION("the density gradient is the weighted least-squares fit, solved by QR") {
     std::vector<so::Reconstruction<2>> recon(p.n_real);
-    so::reconstruct_density(p, cells, recon);
+    so::reconstruct_density(p, cells, recon, p.n_real);
     for (std::size_t a = 0; a < p.n_real; ++a) {
       std::vector<so::Face<2>> faces;
       for (const auto& f : cells.faces_of(a))

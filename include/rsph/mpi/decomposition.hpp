@@ -397,6 +397,21 @@ class Decomposition {
     return n_own;
   }
 
+  /// After add_remap_halo: a per-particle value, `width` numbers per particle of the local set, replaced on the
+  /// other ranks' particles by their owners' (one exchange).
+  void refresh_rows(std::vector<double>& v, std::size_t width) const {
+    if (ranks() == 1) return;
+    std::vector<std::vector<double>> out(static_cast<std::size_t>(ranks()));
+    for (std::size_t q = 0; q < out.size(); ++q)
+      for (const std::uint32_t a : halo_send_[q])
+        out[q].insert(out[q].end(), v.begin() + static_cast<std::ptrdiff_t>(a * width),
+                      v.begin() + static_cast<std::ptrdiff_t>((a + 1) * width));
+    const auto in = exchange(out);
+    require(in.size() == halo_count_ * width && v.size() >= (halo_first_ + halo_count_) * width,
+            "the remap's refresh: the other ranks sent a value for each of their particles here");
+    std::copy(in.begin(), in.end(), v.begin() + static_cast<std::ptrdiff_t>(halo_first_ * width));
+  }
+
   /// Undoes add_remap_halo before a remap by owners that the particles gathered could not decide (every rank at
   /// once): the local set is the first n_own again, and the remap gathers half as far again from now on.
   template <bool E>

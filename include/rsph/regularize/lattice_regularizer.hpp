@@ -98,11 +98,11 @@ class LatticeRegularizer {
     requires Lattice::remaps_on_ranks;
   };
 
-  /// On many ranks, the first-order remap onto a lattice fixed by the box builds each old cell once, on the rank
-  /// that owns its particle, and sends the overlaps to the ranks that keep the new cells (owner_sums.hpp); the
+  /// On many ranks, the remap onto a lattice fixed by the box (either order) builds each old cell once, on the
+  /// rank that owns its particle, and sends the overlaps to the ranks that keep the new cells (owner_sums.hpp;
+  /// the second order also the neighbours' geometry, the limiter's bounds and the thermal floor's cells); the
   /// others build the cells of their neighbours' particles near them too.
-  static constexpr bool remaps_by_owners =
-      RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice> && std::is_same_v<Order, FirstOrder>;
+  static constexpr bool remaps_by_owners = RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice>;
 
   using Options = RegularizerOptions<Builder, Region, Order>;
 

@@ -38,27 +38,38 @@ bool cells_complete(const ParticleSet<D, E>& p, std::span<const double> reach, c
   return true;
 }
 
-/// The numbers one new cell's sums travel as: its flat index, m, m v, E and the covered volume.
+/// One new cell's sums as D + 3 numbers: m, m v, E and the covered volume.
+template <int D>
+void write_sums(const Conserved<D>& c, double* v) {
+  v[0] = c.m;
+  for (int k = 0; k < D; ++k) v[1 + k] = c.mv[k];
+  v[1 + D] = c.E;
+  v[2 + D] = c.volume;
+}
+template <int D>
+Conserved<D> read_sums(const double* v) {
+  Conserved<D> c;
+  c.m = v[0];
+  for (int k = 0; k < D; ++k) c.mv[k] = v[1 + k];
+  c.E = v[1 + D];
+  c.volume = v[2 + D];
+  return c;
+}
+
+/// The numbers one new cell's sums travel as: its flat index, then its sums.
 template <int D>
 constexpr std::size_t owner_record = 4 + D;
 
 template <int D>
 void pack_sums(std::vector<double>& out, std::size_t flat, const Conserved<D>& c) {
   out.push_back(static_cast<double>(flat));  // exact: flat indices stay below 2^62, cells below 2^53 here
-  out.push_back(c.m);
-  for (int k = 0; k < D; ++k) out.push_back(c.mv[k]);
-  out.push_back(c.E);
-  out.push_back(c.volume);
+  out.resize(out.size() + D + 3);
+  write_sums<D>(c, out.data() + out.size() - (D + 3));
 }
 
 template <int D>
 Conserved<D> unpack_sums(const double* r) {
-  Conserved<D> c;
-  c.m = r[1];
-  for (int k = 0; k < D; ++k) c.mv[k] = r[2 + k];
-  c.E = r[2 + D];
-  c.volume = r[3 + D];
-  return c;
+  return read_sums<D>(r + 1);
 }
 
 /// The sites of the grid cells `flats`, D coordinates after another, for RankPart::owner_of.
@@ -162,6 +173,35 @@ void add_window(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner, 
     kept.at(static_cast<std::size_t>(in[k])) = unpack_sums<D>(&in[k]);
 }
 
+/// The end of the remap by owners, once `kept` holds the complete sums of the cells this rank keeps: adds the
+/// complete sums of the cells within `layers` of them that others keep (for the hand-on; asked of their keepers),
+/// sorts them into lattice order and flags in `elsewhere` the cells added, which the hand-on reads and the emission
+/// skips. `S` and `owner`: the cells this rank's gas touched and their keepers.
+template <int D, class Lattice>
+void add_window_in_lattice_order(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner,
+                                 const CellGrid<D>& grid, const Box<D>& box, const Lattice& lattice,
+                                 const RankPart& part, std::vector<std::uint8_t>& elsewhere, int layers = 2) {
+  const std::size_t n_kept = kept.size();
+  add_window(kept, S, owner, grid, box, lattice, part, layers);
+  const std::vector<std::size_t> window(kept.flat_of.begin() + static_cast<std::ptrdiff_t>(n_kept), kept.flat_of.end());
+  kept.sort_by_cell();  // lattice order, as one process sums them: the hand-on visits the cells in it
+  elsewhere.assign(kept.size(), 0);
+  for (const std::size_t f : window) elsewhere[static_cast<std::size_t>(kept.find(f))] = 1;
+}
+
+/// Which rank keeps each new cell of `flats` (on `grid`, the grid of the whole set); raises HaloTooNarrow on every
+/// rank where a rank's cells are not complete (`cells_complete`) or a keeper is undecided.
+template <int D, class Lattice>
+std::vector<int> keepers_of(std::span<const std::size_t> flats, const CellGrid<D>& grid, const Box<D>& box,
+                            const Lattice& lattice, const RankPart& part, bool cells_complete) {
+  require(part.owner_of && part.exchange, "regularization: the remap by owners needs owner_of and exchange");
+  require(grid.n_cells < (std::size_t{1} << 53), "regularization: too many lattice cells to send their indices");
+  auto owner = part.owner_of(site_coordinates(flats, grid, box, lattice));
+  require_decided_everywhere(cells_complete && std::find(owner.begin(), owner.end(), -1) == owner.end(), part,
+                             "an old cell, or the keeper of a new cell it meets,");
+  return owner;
+}
+
 /// Completes the sums of a remap whose old cells were built by their owners only (part.by_owners()): returns the
 /// sums of the cells this rank keeps, complete, and of the cells within `layers` of them that others keep (for the
 /// hand-on), in lattice order; `elsewhere` flags the latter, which the hand-on reads and the emission skips.
@@ -171,19 +211,78 @@ template <int D, class Lattice>
 Sums<D> complete_on_owners(const Sums<D>& S, const CellGrid<D>& grid, const Box<D>& box, const Lattice& lattice,
                            const RankPart& part, bool cells_complete, std::vector<std::uint8_t>& elsewhere,
                            int layers = 2) {
-  require(part.owner_of && part.exchange, "regularization: the remap by owners needs owner_of and exchange");
-  require(grid.n_cells < (std::size_t{1} << 53), "regularization: too many lattice cells to send their indices");
-  const auto owner = part.owner_of(site_coordinates(std::span<const std::size_t>(S.flat_of), grid, box, lattice));
-  require_decided_everywhere(cells_complete && std::find(owner.begin(), owner.end(), -1) == owner.end(), part,
-                             "an old cell, or the keeper of a new cell it meets,");
+  const auto owner = keepers_of(std::span<const std::size_t>(S.flat_of), grid, box, lattice, part, cells_complete);
   Sums<D> kept = gather_kept_parts(S, owner, part);
-  const std::size_t n_kept = kept.size();
-  add_window(kept, S, owner, grid, box, lattice, part, layers);
-  const std::vector<std::size_t> window(kept.flat_of.begin() + static_cast<std::ptrdiff_t>(n_kept), kept.flat_of.end());
-  kept.sort_by_cell();  // lattice order, as one process sums them: the hand-on visits the cells in it
-  elsewhere.assign(kept.size(), 0);
-  for (const std::size_t f : window) elsewhere[static_cast<std::size_t>(kept.find(f))] = 1;
+  add_window_in_lattice_order(kept, S, owner, grid, box, lattice, part, elsewhere, layers);
   return kept;
+}
+
+/// The cells kept here that only other ranks touched, after complete_at_keepers: their flat indices and values.
+struct KeptElsewhereTouched {
+  std::vector<std::size_t> flat;
+  std::vector<double> values;
+};
+
+/// Values of the new cells a rank's gas touched (cell i: flat index flat[i] on the grid of the whole set, keeper
+/// owner[i], numbers values[i w, (i + 1) w)) made complete over the ranks: each cell's keeper combines every rank's
+/// part into its own, its own first and then the others' in rank order (`combine(into, part)`, w numbers each),
+/// and sends the result back to every rank that sent a part, which takes it in place of its own. Every rank that
+/// touched a cell then holds the same numbers for it. Two exchanges. Returns the cells kept here that only others
+/// touched, with their complete values.
+template <class Combine>
+KeptElsewhereTouched complete_at_keepers(std::span<const std::size_t> flat, std::span<const int> owner,
+                                         std::vector<double>& values, std::size_t w, const RankPart& part,
+                                         Combine&& combine) {
+  const auto P = static_cast<std::size_t>(part.ranks);
+  SlotMap mine;  // the cells kept here that this rank touched: flat -> i
+  std::vector<std::vector<double>> out(P);
+  std::vector<std::vector<std::uint32_t>> sent(P);  // per keeper: the cells whose parts went there, in order
+  for (std::size_t i = 0; i < flat.size(); ++i) {
+    const auto q = static_cast<std::size_t>(owner[i]);
+    if (owner[i] == part.rank) {
+      mine.find_or_insert(flat[i], static_cast<std::uint32_t>(i));
+      continue;
+    }
+    out[q].push_back(static_cast<double>(flat[i]));
+    out[q].insert(out[q].end(), values.begin() + static_cast<std::ptrdiff_t>(i * w),
+                  values.begin() + static_cast<std::ptrdiff_t>((i + 1) * w));
+    sent[q].push_back(static_cast<std::uint32_t>(i));
+  }
+  std::vector<int> counts;
+  const auto in = part.exchange(out, &counts);
+  KeptElsewhereTouched extra;
+  SlotMap extra_slot;
+  auto complete_of = [&](std::size_t f) -> double* {
+    if (const std::int64_t i = mine.find(f); i >= 0) return values.data() + static_cast<std::size_t>(i) * w;
+    return extra.values.data() + static_cast<std::size_t>(extra_slot.find(f)) * w;
+  };
+  for (std::size_t r = 0; r < in.size(); r += 1 + w) {
+    const auto f = static_cast<std::size_t>(in[r]);
+    if (mine.find(f) < 0 && extra_slot.find(f) < 0) {  // the first part of a cell this rank did not touch
+      extra_slot.find_or_insert(f, std::uint32_t(extra.flat.size()));
+      extra.flat.push_back(f);
+      extra.values.insert(extra.values.end(), in.begin() + static_cast<std::ptrdiff_t>(r + 1),
+                          in.begin() + static_cast<std::ptrdiff_t>(r + 1 + w));
+      continue;
+    }
+    combine(complete_of(f), &in[r + 1]);
+  }
+  std::vector<std::vector<double>> answer(P);
+  std::size_t r = 0;
+  for (std::size_t q = 0; q < counts.size(); ++q)
+    for (std::size_t k = 0; k < static_cast<std::size_t>(counts[q]); k += 1 + w, r += 1 + w) {
+      const double* c = complete_of(static_cast<std::size_t>(in[r]));
+      answer[q].insert(answer[q].end(), c, c + w);
+    }
+  const auto back = part.exchange(answer, nullptr);
+  std::size_t at = 0;  // the answers come in rank order, each keeper's in the order its cells were sent
+  for (std::size_t q = 0; q < P; ++q)
+    for (const std::uint32_t i : sent[q]) {
+      std::copy_n(back.begin() + static_cast<std::ptrdiff_t>(at), w, values.begin() + std::ptrdiff_t(i * w));
+      at += w;
+    }
+  require(at == back.size(), "regularization: a keeper answered for other cells than it was sent");
+  return extra;
 }
 
 }  // namespace rsph::regularize::detail

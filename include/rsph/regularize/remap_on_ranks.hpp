@@ -45,6 +45,7 @@ auto remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo i
     part.encloses = [&d](std::span<const double> x, double r) {
       return d.gathered().encloses(Eigen::Map<const Vec<D>>(x.data()), r);
     };
+    part.refresh = [&d](std::vector<double>& v, std::size_t width) { d.refresh_rows(v, width); };
     part.rank = d.comm().rank();
     part.ranks = d.ranks();
   }

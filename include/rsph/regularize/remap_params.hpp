@@ -54,7 +54,7 @@ struct RankPart {
   /// How many of the local set's first particles are this rank's own (the others are other ranks' out to the
   /// remap's reach): a sum over the whole set adds only these on each rank. Every one in one process.
   std::size_t own = std::numeric_limits<std::size_t>::max();
-  /// The remap by owners (a first-order remap onto a lattice fixed by the box): each rank built the cells of its
+  /// The remap by owners (either order, onto a lattice fixed by the box): each rank built the cells of its
   /// own particles only, and completes the sums of the new cells it keeps with the others' parts
   /// (owner_sums.hpp). `owner_of` names the rank that keeps each point (D coordinates after another);
   /// `exchange` sends list q to rank q and returns what every rank sent here in rank order (with the count from
@@ -65,6 +65,10 @@ struct RankPart {
   /// holds every particle of the run, so that an old cell reaching half as far is complete here. `owner_of` gives
   /// -1 for a point whose nearest particle it cannot tell for the same reason. Absent: everywhere.
   std::function<bool(std::span<const double>, double)> encloses;
+  /// The second-order remap by owners: a per-particle value, `width` numbers per particle of the local set in its
+  /// order, replaced on the other ranks' particles (after the first `own`) by what their owners hold (the old
+  /// cells' geometry and fits that the neighbours' gradients read).
+  std::function<void(std::vector<double>&, std::size_t)> refresh;
   int rank = 0, ranks = 1;
 
   double max(double v) const { return max_over_ranks ? max_over_ranks(v) : v; }

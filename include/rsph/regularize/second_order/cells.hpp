@@ -10,6 +10,8 @@
 #include "rsph/regularize/remap.hpp"
 #include "rsph/regularize/second_order/reconstruction.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <numeric>
@@ -59,6 +61,7 @@ struct CellStore {
   std::vector<double> volume;
   std::vector<Vec<D>> centroid;  ///< relative to the particle
   std::vector<Mat<D>> inertia;   ///< int (x - x_c)(x - x_c)^T dA
+  std::vector<double> reach;     ///< the distance from the particle to the cell's farthest point; -1: not built
 
   std::size_t size() const { return volume.size(); }
   /// Whether cell a was built (a remap may build some cells only); one not built has no volume.
@@ -193,6 +196,7 @@ void collect_cells(const ParticleSet<2, E>& p, const Box<2>& box, Builder& build
   s.volume.resize(n);
   s.centroid.resize(n);
   s.inertia.resize(n);
+  s.reach.assign(n, -1.0);
   lookup.build(p.x, geometry::detail::mean_spacing(p.x, box));
   run_parallel(n, [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t a = begin; a < end; ++a) {
@@ -203,6 +207,9 @@ void collect_cells(const ParticleSet<2, E>& p, const Box<2>& box, Builder& build
         continue;
       }
       set_geometry<2>(s, a, piece_moments(geometry::moments(s.polygon(a))));
+      double r2 = 0.0;
+      for (const auto& v : s.vertices_of(a)) r2 = std::max(r2, v.squaredNorm());
+      s.reach[a] = std::sqrt(r2);
       const std::span<Face<2>> faces(s.faces.data() + s.start[a], s.start[a + 1] - s.start[a]);
       find_faces(p, box, lookup, a, s.vertices_of(a), faces);
     }
@@ -221,6 +228,7 @@ void collect_cells(const ParticleSet<1, E>& p, const Box<1>& box, const Lattice&
   s.volume.resize(n);
   s.centroid.resize(n);
   s.inertia.resize(n);
+  s.reach.assign(n, -1.0);
   std::vector<std::uint32_t> order;
   order.reserve(n);
   detail::for_each_old_interval(p, box, lattice, params, grid,
@@ -228,6 +236,7 @@ void collect_cells(const ParticleSet<1, E>& p, const Box<1>& box, const Lattice&
                                   s.vertices[2 * a] = Vec<1>(left - p.x[a][0]);
                                   s.vertices[2 * a + 1] = Vec<1>(right - p.x[a][0]);
                                   set_geometry<1>(s, a, interval_moments(left - p.x[a][0], right - p.x[a][0]));
+                                  s.reach[a] = std::max(p.x[a][0] - left, right - p.x[a][0]);
                                   order.push_back(static_cast<std::uint32_t>(a));
                                 });
   auto link = [&](std::uint32_t a, std::uint32_t b, std::size_t slot, double side) {

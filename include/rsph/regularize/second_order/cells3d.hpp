@@ -103,6 +103,7 @@ struct KeepCells3 {
                                                               kept += m;
                                                             });
     set_geometry<3>(ws->cells, a, piece_moments(kept));
+    ws->cells.reach[a] = detail::cell_reach(cell);
     ws->piece_thread[a] = static_cast<std::uint32_t>(thread);
     ws->piece_first[a] = static_cast<std::uint32_t>(first);
     ws->piece_count[a] = static_cast<std::uint32_t>(pieces.flat.size() - first);
@@ -126,6 +127,7 @@ void collect_cells_and_pieces(const ParticleSet<3, E>& p, const Box<3>& box, con
   ws.piece_count.assign(n, 0);
   CellStore<3>& s = ws.cells;
   s.volume.assign(n, 0.0);
+  s.reach.assign(n, -1.0);
   s.centroid.resize(n);
   s.inertia.resize(n);
   KeepCells3<Lattice, E, Region, W> keep{&p, &lattice, &box, &grid, &region, &ws};

@@ -16,6 +16,7 @@
 #include "rsph/regularize/remap.hpp"
 #include "rsph/regularize/second_order/cells.hpp"
 #include "rsph/regularize/second_order/cells3d.hpp"
+#include "rsph/regularize/second_order/on_owners.hpp"
 #include "rsph/regularize/second_order/pieces.hpp"
 #include "rsph/regularize/second_order/reconstruction.hpp"
 #include "rsph/regularize/second_order/workspace.hpp"
@@ -37,14 +38,15 @@ double specific_total_energy(double u, const Vec<D>& v) {
 }
 
 /// Density gradients about the centroids, the density's range over each cell and its neighbours, and the
-/// mass centroids the gradients give.
+/// mass centroids the gradients give, for the first n_fit cells (the others' reconstructions cleared).
 template <int D, bool E>
-void reconstruct_density(const ParticleSet<D, E>& p, const CellStore<D>& s, std::vector<Reconstruction<D>>& recon) {
+void reconstruct_density(const ParticleSet<D, E>& p, const CellStore<D>& s, std::vector<Reconstruction<D>>& recon,
+                         std::size_t n_fit) {
   run_parallel(p.n_real, [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t a = begin; a < end; ++a) {
       Reconstruction<D>& r = recon[a];
       r = Reconstruction<D>{};
-      if (!s.built(a)) continue;
+      if (a >= n_fit || !s.built(a)) continue;
       r.x_m = s.centroid[a];
       const double rho = p.m[a] / s.volume[a];
       r.range.rho.add(rho);
@@ -63,9 +65,11 @@ void reconstruct_density(const ParticleSet<D, E>& p, const CellStore<D>& s, std:
   });
 }
 
-/// Velocity and specific total energy gradients about the mass centroids, and their ranges.
+/// Velocity and specific total energy gradients about the mass centroids, and their ranges, for the first n_fit
+/// cells.
 template <int D, bool E>
-void reconstruct_motion(const ParticleSet<D, E>& p, const CellStore<D>& s, std::vector<Reconstruction<D>>& recon) {
+void reconstruct_motion(const ParticleSet<D, E>& p, const CellStore<D>& s, std::vector<Reconstruction<D>>& recon,
+                        std::size_t n_fit) {
   using Fields = Eigen::Matrix<double, D + 1, 1>;  // v, then e
   auto fields = [&](std::size_t b) {
     Fields q;
@@ -76,7 +80,7 @@ void reconstruct_motion(const ParticleSet<D, E>& p, const CellStore<D>& s, std::
       q[D] = 0.0;
     return q;
   };
-  run_parallel(p.n_real, [&](int, std::size_t begin, std::size_t end) {
+  run_parallel(n_fit, [&](int, std::size_t begin, std::size_t end) {
     for (std::size_t a = begin; a < end; ++a) {
       Reconstruction<D>& r = recon[a];
       const Fields qa = fields(a);
@@ -171,10 +175,10 @@ OldCell<D> old_cell(const ParticleSet<D, E>& p, std::vector<Reconstruction<D>>& 
   return o;
 }
 
-/// One pass over the old cells' pieces: every piece's shares into the per-thread sums (reduced into
+/// One pass over the first n_old old cells' pieces: every piece's shares into the per-thread sums (reduced into
 /// sums[0]), and, with u, the least u of the cells feeding each new cell (into ws.u_min[0]).
 template <int D, bool E>
-void hand_out_all(const ParticleSet<D, E>& p, bool limit, std::size_t n_cells, Workspace<D>& ws,
+void hand_out_all(const ParticleSet<D, E>& p, std::size_t n_old, bool limit, std::size_t n_cells, Workspace<D>& ws,
                   std::vector<detail::Sums<D>>& sums) {
   detail::clear_sums(sums, n_cells);
   const auto n_threads = static_cast<std::size_t>(max_threads());
@@ -182,7 +186,7 @@ void hand_out_all(const ParticleSet<D, E>& p, bool limit, std::size_t n_cells, W
     ws.u_min.resize(n_threads);
     for (auto& u : ws.u_min) u.assign(n_cells, std::numeric_limits<double>::max());
   }
-  run_parallel(p.n_real, [&](int t, std::size_t begin, std::size_t end) {
+  run_parallel(n_old, [&](int t, std::size_t begin, std::size_t end) {
     const auto tt = static_cast<std::size_t>(t);
     for (std::size_t a = begin; a < end; ++a) {
       if (!ws.cells.built(a)) continue;
@@ -242,41 +246,52 @@ std::size_t take_to_first_order(std::size_t n_old, const std::vector<std::uint8_
   return taken;
 }
 
-/// Hands every old cell out into ws.sums[0], again and again while a new particle falls below the thermal
-/// floor, each time with the cells that feed one at first order.
-template <int D, bool E>
-void hand_out_above_floor(const ParticleSet<D, E>& p, const SecondOrderParams& second, std::size_t n_cells,
-                          RemapWorkspace<D>& ws, Workspace<D>& w2, RemapStats& stats) {
+/// Hands the first n_old old cells out into ws.sums[0], again and again while a new particle falls below the
+/// thermal floor, each time with the cells that feed one at first order. `owners`: on many ranks, the sums are
+/// completed over the ranks after each pass, and every rank takes as many passes.
+template <int D, bool E, class Owners = InOneProcess>
+void hand_out_above_floor(const ParticleSet<D, E>& p, std::size_t n_old, const SecondOrderParams& second,
+                          std::size_t n_cells, RemapWorkspace<D>& ws, Workspace<D>& w2, RemapStats& stats,
+                          Owners&& owners = Owners{}) {
   for (stats.passes = 1;; ++stats.passes) {
-    hand_out_all(p, second.limit, n_cells, w2, ws.sums);
-    if constexpr (!E) break;
-    if (mark_cold_cells(ws.sums[0], w2.u_min[0], second.thermal_floor, w2.bad) == 0) break;
-    const std::size_t taken = take_to_first_order(p.n_real, w2.bad, w2);
-    stats.first_order_cells += taken;
-    if (taken == 0) break;  // every feeder is at first order already: nothing left to fall back on
+    hand_out_all(p, n_old, second.limit, n_cells, w2, ws.sums);
+    if constexpr (!E) {
+      owners.complete_sums(ws.sums[0], nullptr);
+      break;
+    } else {
+      owners.complete_sums(ws.sums[0], &w2.u_min[0]);
+      if (!owners.any(mark_cold_cells(ws.sums[0], w2.u_min[0], second.thermal_floor, w2.bad))) break;
+      const std::size_t taken = take_to_first_order(n_old, w2.bad, w2);
+      stats.first_order_cells += taken;
+      if (!owners.any(taken)) break;  // every feeder is at first order already: nothing left to fall back on
+    }
   }
 }
 
 /// The second-order sums on the cells of `grid`: every old cell built and kept, its gradients fitted, its
 /// pieces listed and handed out; lands in ws.sums[0], dense over the grid or, past
 /// params.dense_cells_per_particle cells per particle and where `allow_sparse`, over the cells that receive a
-/// piece (sums.hpp).
-template <class Lattice, class Builder, int D, bool E, class Region, class Grid>
+/// piece (sums.hpp). `owners`: on many ranks, the remap by owners (the cells of `only`, this rank's own, built;
+/// the neighbours' geometry, the bounds and the sums completed by the other ranks).
+template <class Lattice, class Builder, int D, bool E, class Region, class Grid, class Owners = InOneProcess>
 detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
                                    Builder& builder, const RemapParams& params, const SecondOrderParams& second,
                                    const Region& region, const Grid& grid, RemapWorkspace<D>& ws, Workspace<D>& w2,
                                    RemapStats& stats, bool allow_sparse = true,
-                                   std::span<const std::uint32_t> only = {}) {
+                                   std::span<const std::uint32_t> only = {}, Owners&& owners = Owners{}) {
   if constexpr (D == 1)
     collect_cells(p, box, lattice, params, grid, w2.cells);
   else if constexpr (D == 2)
     collect_cells(p, box, builder, params, region, ws.closing, w2.by_thread, w2.lookup, w2.cells, only);
   else
     collect_cells_and_pieces(p, box, lattice, builder, params, region, grid, ws.closing, w2, only);
-  w2.recon.resize(p.n_real);
-  reconstruct_density(p, w2.cells, w2.recon);
-  reconstruct_motion(p, w2.cells, w2.recon);
   if constexpr (D < 3) list_pieces(p, box, lattice, params, grid, w2);
+  const std::size_t n_fit = owners.own(p.n_real);  // the cells handed out here
+  owners.share_geometry(w2.cells);
+  w2.recon.resize(p.n_real);
+  reconstruct_density(p, w2.cells, w2.recon, n_fit);
+  owners.share_mass_centroids(w2.recon);
+  reconstruct_motion(p, w2.cells, w2.recon, n_fit);
   const bool sparse = allow_sparse && detail::sum_sparsely(grid.n_cells, p.n_real, params.dense_cells_per_particle);
   std::vector<std::size_t> cells;
   if (sparse)
@@ -284,9 +299,13 @@ detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box
   else
     detail::check_dense_sums_fit<D>(grid.n_cells, p.n_real);
   const std::size_t n_cells = sparse ? cells.size() : grid.n_cells;
-  if (second.limit) gather_bounds(p.n_real, n_cells, w2);
+  owners.find_touched(p, w2, n_fit, n_cells, sparse ? &cells : nullptr);
+  if (second.limit) {
+    gather_bounds(n_fit, n_cells, w2);
+    owners.complete_bounds(w2.bounds[0]);
+  }
   w2.first_order.assign(p.n_real, 0);
-  hand_out_above_floor(p, second, n_cells, ws, w2, stats);
+  hand_out_above_floor(p, n_fit, second, n_cells, ws, w2, stats, owners);
   for (const auto& r : w2.recon) stats.limited_cells += r.limited;
   stats.max_volume_mismatch = ws.sums[0].max_mismatch;
   if (sparse) ws.sums[0].index_by(std::move(cells));
@@ -315,6 +334,18 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   second_order::Workspace<D>& w2 = ws2 ? *ws2 : local2;
   const auto grid = detail::new_cells(p, box, lattice, params, part);
   RemapStats stats;
+  ws.elsewhere.clear();
+  if constexpr (!PerSiteLattice<Lattice>) {
+    if (part.by_owners()) {  // the sums travel by flat index on the grid of the whole set, alike on every rank
+      const auto whole = detail::candidate_grid(p, box, lattice, params, 1, part);
+      second_order::ByOwners<D, Lattice> owners(part, box, lattice, grid, whole);
+      const auto& S = second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2,
+                                                      stats, true, part.cells, owners);
+      auto kept = owners.kept_sums(S, ws.elsewhere);
+      detail::emit_on_lattice(p, box, lattice, params, whole, kept, ws, stats, part);
+      return stats;
+    }
+  }
   second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2, stats, true,
                                   part.cells);
   detail::emit_on_lattice(p, box, lattice, params, grid, ws.sums[0], ws, stats, part);

@@ -32,14 +32,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   auto sums_on = [&](const detail::CellGrid<D>& g, RemapStats& stats) -> detail::Sums<D>& {
     auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false,
                                               part.cells);
-    if constexpr (D == 2) {  // the face hand-out builds again the old cells whose reach meets a face cell
-      ws.reach.resize(p.n_real);
-      for (std::size_t a = 0; a < p.n_real; ++a) {
-        double r2 = 0.0;
-        for (const auto& v : w2.cells.vertices_of(a)) r2 = std::max(r2, v.squaredNorm());
-        ws.reach[a] = w2.cells.built(a) ? std::sqrt(r2) : -1.0;  // -1: not built (another rank's part)
-      }
-    }
+    if constexpr (D == 2) ws.reach = w2.cells.reach;  // the face hand-out builds again the cells reaching a face
     return S;
   };
   auto at_faces = [&](const auto& fp, const detail::Faces& faces, RemapStats& stats) -> detail::Sums<D>& {
@@ -48,7 +41,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
     const std::size_t taken = second_order::take_to_first_order(p.n_real, in_face, w2);
     if (taken > 0) {
       stats.first_order_cells += taken;
-      second_order::hand_out_above_floor(p, second, grid.n_cells, ws, w2, stats);
+      second_order::hand_out_above_floor(p, p.n_real, second, grid.n_cells, ws, w2, stats);
     }
     return ws.sums[0];
   };
