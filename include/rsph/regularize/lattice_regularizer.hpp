@@ -98,11 +98,15 @@ class LatticeRegularizer {
     requires Lattice::remaps_on_ranks;
   };
 
-  /// On many ranks, the remap onto a lattice fixed by the box (either order) builds each old cell once, on the
-  /// rank that owns its particle, and sends the overlaps to the ranks that keep the new cells (owner_sums.hpp;
-  /// the second order also the neighbours' geometry, the limiter's bounds and the thermal floor's cells); the
-  /// others build the cells of their neighbours' particles near them too.
-  static constexpr bool remaps_by_owners = RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice>;
+  /// On many ranks, the remap onto a lattice fixed by the box, or onto one that says it does (the rings, whose
+  /// sites every rank numbers alike), builds each old cell once, either order, on the rank that owns its
+  /// particle, and sends the overlaps to the ranks that keep the new cells (owner_sums.hpp; the second order
+  /// also the neighbours' geometry, the limiter's bounds and the thermal floor's cells); the others (the
+  /// multi-level lattice) build the cells of their neighbours' particles near them too.
+  static constexpr bool remaps_by_owners =
+      (RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice>) || requires {
+    requires Lattice::remaps_by_owners;
+  };
 
   using Options = RegularizerOptions<Builder, Region, Order>;
 

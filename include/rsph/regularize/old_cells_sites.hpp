@@ -11,6 +11,8 @@
 #include "rsph/regularize/lattice.hpp"
 #include "rsph/regularize/region.hpp"
 
+#include <algorithm>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -74,6 +76,32 @@ SiteCellVisitor<Sites, E, Region, Action> old_cell_visitor(const ParticleSet<2, 
   return Visitor{&p, &sites, &region, &action,
                  std::vector<typename Visitor::Scratch>(static_cast<std::size_t>(geometry::builder_threads()))};
 }
+
+/// The new cells of a per-site lattice as the ranks name them (owner_sums.hpp): by their site's number, which
+/// every rank gives alike (the sites are the whole set's on every rank).
+template <SiteCells Sites>
+struct SitesOnRanks {
+  const Sites* sites;
+  std::size_t size() const { return sites->n_cells; }
+  Vec<2> site(std::size_t c) const { return sites->site(c); }
+  /// f(g) for the sites within `layers` steps of neighbours of site c, each once, c left out.
+  template <class F>
+  void for_each_within(std::size_t c, int layers, F&& f) const {
+    std::vector<std::size_t> seen{c};
+    std::size_t from = 0;
+    for (int layer = 0; layer < layers; ++layer) {
+      const std::size_t to = seen.size();
+      for (std::size_t i = from; i < to; ++i)
+        sites->for_each_neighbour(seen[i], [&](std::size_t g) {
+          if (std::find(seen.begin(), seen.end(), g) != seen.end()) return;
+          seen.push_back(g);
+          f(g);
+        });
+      from = to;
+    }
+  }
+  std::int64_t whole_flat(std::size_t c) const { return static_cast<std::int64_t>(c); }
+};
 
 /// The new cells of a per-site lattice for the particles `p`: its sites placed for them (a rings lattice
 /// follows their orbits) with the cells built out to where an old cell may reach; on many ranks (`part`), the

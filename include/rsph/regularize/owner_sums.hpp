@@ -4,8 +4,9 @@
 // rest lying on other ranks. Each new cell is kept by one rank (the owner of its site's nearest old particle);
 // the others send it their parts, in one sparse all-to-all, and it adds them in rank order. The hand-on of
 // nearly empty cells then reads the complete sums of the cells around a kept one, which their owners send in a
-// second exchange (a request, then the answer). What is the same in every dimension is here; the lattice
-// gives the sites, the grid their indices.
+// second exchange (a request, then the answer). What is the same in every dimension and lattice is here; the
+// new cells as the ranks name them (GridCells for a lattice fixed by the box, the sites themselves for a
+// per-site lattice, SitesOnRanks) give their sites, indices and neighbours.
 #include "rsph/core/errors.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/regularize/cell_grid.hpp"
@@ -72,30 +73,48 @@ Conserved<D> unpack_sums(const double* r) {
   return read_sums<D>(r + 1);
 }
 
-/// The sites of the grid cells `flats`, D coordinates after another, for RankPart::owner_of.
+/// The new cells of a lattice fixed by the box as the ranks name them: by their flat index on the grid of the
+/// whole set `whole`, which every rank lays out alike. `local`: the grid a rank sums on.
 template <int D, class Lattice>
-std::vector<double> site_coordinates(std::span<const std::size_t> flats, const CellGrid<D>& grid, const Box<D>& box,
-                                     const Lattice& lattice) {
+struct GridCells {
+  const CellGrid<D>* whole;
+  const CellGrid<D>* local;
+  const Box<D>* box;
+  const Lattice* lattice;
+  std::size_t size() const { return whole->n_cells; }
+  Vec<D> site(std::size_t f) const { return lattice->site(*box, whole->unflat(f)); }
+  /// f(g) for the cells within `layers` of cell c, c left out.
+  template <class F>
+  void for_each_within(std::size_t c, int layers, F&& f) const {
+    for_each_cell_within(*whole, c, layers, f);
+  }
+  /// The whole grid's cell of the local grid's cell `flat` (-1: outside).
+  std::int64_t whole_flat(std::size_t flat) const { return whole->flat(local->unflat(flat)); }
+};
+
+/// The sites of the new cells `flats` (`cells`: GridCells, or a per-site lattice's), D coordinates after another,
+/// for RankPart::owner_of.
+template <class Cells>
+std::vector<double> site_coordinates(std::span<const std::size_t> flats, const Cells& cells) {
   std::vector<double> xs;
-  xs.reserve(flats.size() * D);
   for (const std::size_t f : flats) {
-    const Vec<D> s = lattice.site(box, grid.unflat(f));
-    for (int k = 0; k < D; ++k) xs.push_back(s[k]);
+    const auto s = cells.site(f);
+    xs.insert(xs.end(), s.data(), s.data() + s.size());
   }
   return xs;
 }
 
-/// Step 0: this rank's parts, summed over its own grid `local` (dense or sparse), as sparse sums over the grid of
-/// the whole set `whole`, which every rank lays out alike, in lattice order; cells that received nothing left out.
-template <int D>
-Sums<D> on_whole_grid(const Sums<D>& S, const CellGrid<D>& local, const CellGrid<D>& whole) {
+/// Step 0: this rank's parts, summed over its own grid (dense or sparse), as sparse sums over the new cells as the
+/// ranks name them (`cells`), in lattice order; cells that received nothing left out.
+template <int D, class Cells>
+Sums<D> numbered_for_ranks(const Sums<D>& S, const Cells& cells) {
   Sums<D> parts;
   parts.reset(0, true);
   parts.max_mismatch = S.max_mismatch;
   std::vector<std::size_t> flats;
   for (std::size_t c = 0; c < S.size(); ++c) {
     if (S.cell[c].volume == 0.0 && S.cell[c].m == 0.0) continue;
-    const std::int64_t g = whole.flat(local.unflat(S.flat(c)));
+    const std::int64_t g = cells.whole_flat(S.flat(c));
     require(g >= 0, "regularization: a new cell lies outside the grid of the whole set");
     flats.push_back(static_cast<std::size_t>(g));
     parts.cell.push_back(S.cell[c]);
@@ -128,18 +147,18 @@ Sums<D> gather_kept_parts(const Sums<D>& S, const std::vector<int>& owner, const
 /// Step 2: the cells within `layers` of a kept one that other ranks keep, asked of their keepers, and their
 /// complete sums added to `kept` (after its own entries, the first n_kept). `S` and `owner` (this rank's parts and
 /// their keepers) name the keepers of the cells this rank's gas touched; the others are asked of part.owner_of.
-template <int D, class Lattice>
-void add_window(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner, const CellGrid<D>& grid,
-                const Box<D>& box, const Lattice& lattice, const RankPart& part, int layers) {
+template <int D, class Cells>
+void add_window(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner, const Cells& cells,
+                const RankPart& part, int layers) {
   const std::size_t n_kept = kept.size();
   SlotMap seen;  // the cells asked for, once each
   std::vector<std::size_t> known, unknown;
   std::vector<int> known_owner;
   for (std::size_t c = 0; c < n_kept; ++c) {
     bool inside = true;  // every neighbour kept here too: the cells that are not look `layers` deep for it
-    for_each_cell_within(grid, kept.flat(c), 1, [&](std::size_t g) { inside = inside && kept.find(g) >= 0; });
+    cells.for_each_within(kept.flat(c), 1, [&](std::size_t g) { inside = inside && kept.find(g) >= 0; });
     if (inside) continue;
-    for_each_cell_within(grid, kept.flat(c), layers, [&](std::size_t g) {
+    cells.for_each_within(kept.flat(c), layers, [&](std::size_t g) {
       if (kept.find(g) >= 0 || seen.find(g) >= 0) return;
       seen.find_or_insert(g, 0);
       if (const std::int64_t e = S.find(g); e >= 0) {
@@ -150,7 +169,7 @@ void add_window(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner, 
       }
     });
   }
-  const auto asked_owner = part.owner_of(site_coordinates(std::span<const std::size_t>(unknown), grid, box, lattice));
+  const auto asked_owner = part.owner_of(site_coordinates(std::span<const std::size_t>(unknown), cells));
   require_decided_everywhere(std::find(asked_owner.begin(), asked_owner.end(), -1) == asked_owner.end(), part,
                              "the keeper of a new cell near another rank's");
   std::vector<std::vector<double>> ask(static_cast<std::size_t>(part.ranks));
@@ -177,26 +196,25 @@ void add_window(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner, 
 /// complete sums of the cells within `layers` of them that others keep (for the hand-on; asked of their keepers),
 /// sorts them into lattice order and flags in `elsewhere` the cells added, which the hand-on reads and the emission
 /// skips. `S` and `owner`: the cells this rank's gas touched and their keepers.
-template <int D, class Lattice>
-void add_window_in_lattice_order(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner,
-                                 const CellGrid<D>& grid, const Box<D>& box, const Lattice& lattice,
+template <int D, class Cells>
+void add_window_in_lattice_order(Sums<D>& kept, const Sums<D>& S, const std::vector<int>& owner, const Cells& cells,
                                  const RankPart& part, std::vector<std::uint8_t>& elsewhere, int layers = 2) {
   const std::size_t n_kept = kept.size();
-  add_window(kept, S, owner, grid, box, lattice, part, layers);
+  add_window(kept, S, owner, cells, part, layers);
   const std::vector<std::size_t> window(kept.flat_of.begin() + static_cast<std::ptrdiff_t>(n_kept), kept.flat_of.end());
   kept.sort_by_cell();  // lattice order, as one process sums them: the hand-on visits the cells in it
   elsewhere.assign(kept.size(), 0);
   for (const std::size_t f : window) elsewhere[static_cast<std::size_t>(kept.find(f))] = 1;
 }
 
-/// Which rank keeps each new cell of `flats` (on `grid`, the grid of the whole set); raises HaloTooNarrow on every
+/// Which rank keeps each new cell of `flats` (of `cells`, as the ranks name them); raises HaloTooNarrow on every
 /// rank where a rank's cells are not complete (`cells_complete`) or a keeper is undecided.
-template <int D, class Lattice>
-std::vector<int> keepers_of(std::span<const std::size_t> flats, const CellGrid<D>& grid, const Box<D>& box,
-                            const Lattice& lattice, const RankPart& part, bool cells_complete) {
+template <class Cells>
+std::vector<int> keepers_of(std::span<const std::size_t> flats, const Cells& cells, const RankPart& part,
+                            bool cells_complete) {
   require(part.owner_of && part.exchange, "regularization: the remap by owners needs owner_of and exchange");
-  require(grid.n_cells < (std::size_t{1} << 53), "regularization: too many lattice cells to send their indices");
-  auto owner = part.owner_of(site_coordinates(flats, grid, box, lattice));
+  require(cells.size() < (std::size_t{1} << 53), "regularization: too many lattice cells to send their indices");
+  auto owner = part.owner_of(site_coordinates(flats, cells));
   require_decided_everywhere(cells_complete && std::find(owner.begin(), owner.end(), -1) == owner.end(), part,
                              "an old cell, or the keeper of a new cell it meets,");
   return owner;
@@ -207,13 +225,12 @@ std::vector<int> keepers_of(std::span<const std::size_t> flats, const CellGrid<D
 /// hand-on), in lattice order; `elsewhere` flags the latter, which the hand-on reads and the emission skips.
 /// `cells_complete`: whether this rank's old cells are (cells_complete). Raises HaloTooNarrow on every rank where
 /// a rank's cells or the keepers it needs lie beyond what it gathered.
-template <int D, class Lattice>
-Sums<D> complete_on_owners(const Sums<D>& S, const CellGrid<D>& grid, const Box<D>& box, const Lattice& lattice,
-                           const RankPart& part, bool cells_complete, std::vector<std::uint8_t>& elsewhere,
-                           int layers = 2) {
-  const auto owner = keepers_of(std::span<const std::size_t>(S.flat_of), grid, box, lattice, part, cells_complete);
+template <int D, class Cells>
+Sums<D> complete_on_owners(const Sums<D>& S, const Cells& cells, const RankPart& part, bool cells_complete,
+                           std::vector<std::uint8_t>& elsewhere, int layers = 2) {
+  const auto owner = keepers_of(std::span<const std::size_t>(S.flat_of), cells, part, cells_complete);
   Sums<D> kept = gather_kept_parts(S, owner, part);
-  add_window_in_lattice_order(kept, S, owner, grid, box, lattice, part, elsewhere, layers);
+  add_window_in_lattice_order(kept, S, owner, cells, part, elsewhere, layers);
   return kept;
 }
 

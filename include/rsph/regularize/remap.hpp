@@ -329,6 +329,21 @@ auto new_cells(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lat
     return candidate_grid(p, box, lattice, params);
 }
 
+/// The remap by owners: calls f(cells, emit_cells) with the new cells as the ranks name them and the cells the
+/// emission reads. A lattice fixed by the box: the flat index on the grid of the whole set, alike on every rank
+/// (GridCells), and that grid; a per-site lattice: the sites' own numbers (SitesOnRanks), and the sites. `grid`:
+/// the new cells this rank sums into (new_cells).
+template <class Lattice, int D, bool E, class Grid, class F>
+void with_cells_of_ranks(const ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice,
+                         const RemapParams& params, const Grid& grid, const RankPart& part, F&& f) {
+  if constexpr (PerSiteLattice<Lattice>) {
+    f(SitesOnRanks<Grid>{&grid}, grid);
+  } else {
+    const auto whole = candidate_grid(p, box, lattice, params, 1, part);
+    f(GridCells<D, Lattice>{&whole, &grid, &box, &lattice}, whole);
+  }
+}
+
 template <class Lattice, int D, bool E>
 void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const RemapParams& params) {
   static_assert(Lattice::dim == D, "the lattice's dimension differs from the particles'");
@@ -373,15 +388,14 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   RemapStats stats;
   stats.max_volume_mismatch = S.max_mismatch;
   ws.elsewhere.clear();
-  if constexpr (!PerSiteLattice<Lattice>) {
-    if (part.by_owners()) {  // the sums travel by flat index on the grid of the whole set, alike on every rank
-      const auto whole = detail::candidate_grid(p, box, lattice, params, 1, part);
-      const bool complete = detail::cells_complete(p, ws.reach, part);
-      S = detail::complete_on_owners(detail::on_whole_grid(S, grid, whole), whole, box, lattice, part, complete,
-                                     ws.elsewhere);
-      detail::emit_on_lattice(p, box, lattice, params, whole, S, ws, stats, part);
-      return stats;
-    }
+  if (part.by_owners()) {  // the sums travel by their cell's number as every rank names it
+    const bool complete = detail::cells_complete(p, ws.reach, part);
+    auto by_owners = [&](const auto& cells, const auto& emit_cells) {
+      S = detail::complete_on_owners(detail::numbered_for_ranks(S, cells), cells, part, complete, ws.elsewhere);
+      detail::emit_on_lattice(p, box, lattice, params, emit_cells, S, ws, stats, part);
+    };
+    detail::with_cells_of_ranks(p, box, lattice, params, grid, part, by_owners);
+    return stats;
   }
   detail::emit_on_lattice(p, box, lattice, params, grid, S, ws, stats, part);
   return stats;

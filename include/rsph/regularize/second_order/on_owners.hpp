@@ -35,14 +35,11 @@ struct InOneProcess {
 };
 
 /// One rank's part of a second-order remap by owners: its own particles are the first `own` of the local set,
-/// the others' follow. `local`: the grid this rank sums on; `whole`: the grid of the whole set, alike on every
-/// rank, whose flat indices name the new cells between ranks.
-template <int D, class Lattice>
+/// the others' follow. `cells`: the new cells as the ranks name them (detail::GridCells, detail::SitesOnRanks).
+template <int D, class Cells>
 class ByOwners {
  public:
-  ByOwners(const RankPart& part, const Box<D>& box, const Lattice& lattice, const detail::CellGrid<D>& local,
-           const detail::CellGrid<D>& whole)
-      : part_(&part), box_(&box), lattice_(&lattice), local_(&local), whole_(&whole) {}
+  ByOwners(const RankPart& part, const Cells& cells) : part_(&part), cells_(cells) {}
 
   std::size_t own(std::size_t n_local) const { return std::min(n_local, part_->own); }
 
@@ -89,12 +86,12 @@ class ByOwners {
     flat_.clear();
     for (std::size_t c = 0; c < n_cells; ++c) {
       if (!touched[c]) continue;
-      const std::int64_t g = whole_->flat(local_->unflat(cells ? (*cells)[c] : c));
+      const std::int64_t g = cells_.whole_flat(cells ? (*cells)[c] : c);
       require(g >= 0, "regularization: a new cell lies outside the grid of the whole set");
       entry_.push_back(static_cast<std::uint32_t>(c));
       flat_.push_back(static_cast<std::size_t>(g));
     }
-    owner_ = detail::keepers_of(std::span<const std::size_t>(flat_), *whole_, *box_, *lattice_, *part_, complete);
+    owner_ = detail::keepers_of(std::span<const std::size_t>(flat_), cells_, *part_, complete);
   }
 
   /// Each touched cell's bounds made the union over every rank's old cells with a piece in it.
@@ -157,15 +154,13 @@ class ByOwners {
     }
     for (std::size_t e = 0; e < extra_.flat.size(); ++e)
       kept.at(extra_.flat[e]) = detail::read_sums<D>(&extra_.values[e * width_]);
-    detail::add_window_in_lattice_order(kept, touched, owner_, *whole_, *box_, *lattice_, *part_, elsewhere);
+    detail::add_window_in_lattice_order(kept, touched, owner_, cells_, *part_, elsewhere);
     return kept;
   }
 
  private:
   const RankPart* part_;
-  const Box<D>* box_;
-  const Lattice* lattice_;
-  const detail::CellGrid<D>*local_, *whole_;
+  Cells cells_;
   std::vector<std::uint32_t> entry_;  ///< the sum entries this rank's own cells touched
   std::vector<std::size_t> flat_;     ///< their cells on the whole grid
   std::vector<int> owner_;            ///< their keepers

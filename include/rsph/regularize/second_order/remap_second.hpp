@@ -26,6 +26,7 @@
 #include <limits>
 #include <span>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 namespace rsph::regularize {
@@ -335,16 +336,16 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lat
   const auto grid = detail::new_cells(p, box, lattice, params, part);
   RemapStats stats;
   ws.elsewhere.clear();
-  if constexpr (!PerSiteLattice<Lattice>) {
-    if (part.by_owners()) {  // the sums travel by flat index on the grid of the whole set, alike on every rank
-      const auto whole = detail::candidate_grid(p, box, lattice, params, 1, part);
-      second_order::ByOwners<D, Lattice> owners(part, box, lattice, grid, whole);
+  if (part.by_owners()) {  // the sums travel by their cell's number as every rank names it
+    auto by_owners = [&](const auto& cells, const auto& emit_cells) {
+      second_order::ByOwners<D, std::decay_t<decltype(cells)>> owners(part, cells);
       const auto& S = second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2,
                                                       stats, true, part.cells, owners);
       auto kept = owners.kept_sums(S, ws.elsewhere);
-      detail::emit_on_lattice(p, box, lattice, params, whole, kept, ws, stats, part);
-      return stats;
-    }
+      detail::emit_on_lattice(p, box, lattice, params, emit_cells, kept, ws, stats, part);
+    };
+    detail::with_cells_of_ranks(p, box, lattice, params, grid, part, by_owners);
+    return stats;
   }
   second_order::second_order_sums(p, box, lattice, builder, params, second, region, grid, ws, w2, stats, true,
                                   part.cells);
