@@ -45,28 +45,28 @@ class ByOwners {
 
   /// The other ranks' cells' volumes and centroids (relative to their particles), from their owners.
   void share_geometry(CellStore<D>& s) const {
-    const std::size_t n = s.volume.size(), n_own = own(n), w = D + 1;
-    std::vector<double> v(n * w, 0.0);
-    for (std::size_t a = 0; a < n_own; ++a) {
-      v[a * w] = s.volume[a];
-      for (int k = 0; k < D; ++k) v[a * w + 1 + std::size_t(k)] = s.centroid[a][k];
-    }
-    part_->refresh(v, w);
-    for (std::size_t a = n_own; a < n; ++a) {
-      s.volume[a] = v[a * w];
-      for (int k = 0; k < D; ++k) s.centroid[a][k] = v[a * w + 1 + std::size_t(k)];
-    }
+    share_from_owners(
+        s.volume.size(), D + 1,
+        [&](std::size_t a, double* v) {
+          v[0] = s.volume[a];
+          for (int k = 0; k < D; ++k) v[1 + k] = s.centroid[a][k];
+        },
+        [&](std::size_t a, const double* v) {
+          s.volume[a] = v[0];
+          for (int k = 0; k < D; ++k) s.centroid[a][k] = v[1 + k];
+        });
   }
 
   /// The other ranks' cells' mass centroids, from their owners' density fits.
   void share_mass_centroids(std::vector<Reconstruction<D>>& recon) const {
-    const std::size_t n = recon.size(), n_own = own(n);
-    std::vector<double> v(n * D, 0.0);
-    for (std::size_t a = 0; a < n_own; ++a)
-      for (int k = 0; k < D; ++k) v[a * D + std::size_t(k)] = recon[a].x_m[k];
-    part_->refresh(v, D);
-    for (std::size_t a = n_own; a < n; ++a)
-      for (int k = 0; k < D; ++k) recon[a].x_m[k] = v[a * D + std::size_t(k)];
+    share_from_owners(
+        recon.size(), D,
+        [&](std::size_t a, double* v) {
+          for (int k = 0; k < D; ++k) v[k] = recon[a].x_m[k];
+        },
+        [&](std::size_t a, const double* v) {
+          for (int k = 0; k < D; ++k) recon[a].x_m[k] = v[k];
+        });
   }
 
   /// The new cells this rank's own old cells (the first n_own of `p`) have pieces in (sum entries of `n_cells`;
@@ -159,6 +159,17 @@ class ByOwners {
   }
 
  private:
+  /// w numbers per particle of the n in the local set: put(a, row) writes this rank's own, take(a, row) reads
+  /// what the owners of the others sent (one exchange, RankPart::refresh).
+  template <class Put, class Take>
+  void share_from_owners(std::size_t n, std::size_t w, Put&& put, Take&& take) const {
+    const std::size_t n_own = own(n);
+    std::vector<double> v(n * w, 0.0);
+    for (std::size_t a = 0; a < n_own; ++a) put(a, &v[a * w]);
+    part_->refresh(v, w);
+    for (std::size_t a = n_own; a < n; ++a) take(a, &v[a * w]);
+  }
+
   const RankPart* part_;
   Cells cells_;
   std::vector<std::uint32_t> entry_;  ///< the sum entries this rank's own cells touched
