@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Runs one program at several rank counts and checks that the answers do not depend on the count: the integer
-results (particles, steps, regularizations) equal, the headline figures of summary.json equal to 1e-8 relative,
+results (particles, steps, regularizations, and on a multi-level lattice the particles per level) equal, the headline figures of summary.json equal to 1e-8 relative,
 and every field of every particle of the last snapshot equal to 1e-10 (--field-tolerance) relative to the
 field's largest value, particles matched by identity (plain SPH) or by position (after a remap, whose new particles are numbered rank
 by rank). Exit status 0 when all agree, 1 otherwise.
@@ -81,6 +81,10 @@ def compare(reference, other, ranks, figures, by_id, tolerance):
     for key in INTEGERS:
         if key in reference[0] and reference[0][key] != other[0][key]:
             problems.append(f"{key}: {reference[0][key]} on 1 rank, {other[0][key]} on {ranks}")
+    if "levels" in reference[0]:  # the particles per level the last remap left, the whole run's on every rank
+        finals = [[e["final"] for e in s["levels"]["per_level"]] for s in (reference[0], other[0])]
+        if finals[0] != finals[1]:
+            problems.append(f"particles per level: {finals[0]} on 1 rank, {finals[1]} on {ranks}")
     for key in figures:
         r, o = reference[0][key], other[0][key]
         if abs(o - r) > 1e-8 * max(abs(r), 1e-300):

@@ -225,9 +225,9 @@ struct GradientSolves {
 
 /// Particles per resolution level from a regularization log: the counts the last regularization left
 /// and their average over steps (each regularization's counts weighted by the steps until the next).
-/// `sum(values)` adds the values up over the ranks (each rank's log counts the particles it kept).
+/// On many ranks, every rank's log is the whole run's.
 template <class Log>
-io::Json level_counts(const Log& log, std::uint64_t total_steps, const std::function<void(std::span<double>)>& sum) {
+io::Json level_counts(const Log& log, std::uint64_t total_steps) {
   io::Json j;
   if (log.empty()) return j;
   const std::size_t n_levels = log.back().stats.per_level.size();
@@ -239,8 +239,6 @@ io::Json level_counts(const Log& log, std::uint64_t total_steps, const std::func
       mean[l] += steps * static_cast<double>(log[k].stats.per_level[l]);
   }
   for (std::size_t l = 0; l < n_levels; ++l) last[l] = static_cast<double>(log.back().stats.per_level[l]);
-  sum(std::span<double>(mean));
-  sum(std::span<double>(last));
   const double span = static_cast<double>(std::max<std::uint64_t>(total_steps - log.front().step, 1));
   std::vector<io::Json> per_level;
   for (std::size_t l = 0; l < mean.size(); ++l) {

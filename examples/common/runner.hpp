@@ -184,8 +184,7 @@ void write_scheme(io::Json& summary, const Sim& sim) {
     sim.regularizer().order_figures([&](const char* name, auto value) { summary.set(name, value); });
   }
   if constexpr (requires { sim.regularizer().lattice().max_level; })
-    summary.set("levels", level_counts(sim.regularizer().log(), sim.steps(),
-                                       [&](std::span<double> values) { sum_over_ranks(sim, values); }));
+    summary.set("levels", level_counts(sim.regularizer().log(), sim.steps()));
   GradientSolves::of(sim).write_to(summary);
 }
 

@@ -454,16 +454,8 @@ class Decomposition {
     return SiteOwners<D>(p.x, p.id, n_own, box, reach, std::move(rank), gathered_);
   }
 
-  /// After the remap of the local set: keeps the new particles whose site is this rank's (`owners`, made before
-  /// the remap), so that every site is kept by exactly one rank, the one that held the gas there. They are
-  /// numbered after all ranks' particles so far, rank by rank (on one rank as the serial run numbers them).
-  template <bool E>
-  void keep_owned_sites(ParticleSet<D, E>& p, const SiteOwners<D>& owners) {
-    if (ranks() > 1) p.erase_if([&](std::size_t a) { return !owners.owned(p.x[a]); });
-    renumber(p);
-  }
-
-  /// New identities for the real particles, after every rank's earlier ones and rank by rank.
+  /// New identities for the real particles, after every rank's earlier ones and rank by rank (after a remap, whose
+  /// ranks emitted the new particles of the sites each keeps: on one rank as the serial run numbers them).
   template <bool E>
   void renumber(ParticleSet<D, E>& p) const {
     std::uint64_t first = 0, mine = p.n_real;

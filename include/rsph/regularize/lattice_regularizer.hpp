@@ -142,7 +142,8 @@ class LatticeRegularizer {
     Record r;
     r.step = s.step;
     r.time = s.time;
-    r.stats = order_.remap(p, box, lattice_, builder_, params_, region_, workspace_, order_workspace_, s.part);
+    r.stats = over_ranks(
+        order_.remap(p, box, lattice_, builder_, params_, region_, workspace_, order_workspace_, s.part), s.part);
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     log_.push_back(r);
     return r.stats.kinetic_converted;

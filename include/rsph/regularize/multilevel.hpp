@@ -196,17 +196,42 @@ void for_each_ring_neighbour(const CellGrid<D>& grid, const Footprint<D>& fp, st
 
 namespace detail {
 
+/// On many ranks, flags in `elsewhere` the new cells with mass whose site another rank keeps (every rank sums the
+/// cells its gathered gas covers): their hand-on is read here, their particles are born there.
+template <int D>
+void flag_kept_elsewhere(const Footprint<D>& fp, const Sums<D>& cells, const RankPart& part,
+                         std::vector<std::uint8_t>& elsewhere) {
+  elsewhere.clear();
+  if (!part.on_ranks()) return;
+  std::vector<std::size_t> heavy;
+  std::vector<double> sites;
+  for (std::size_t c = 0; c < fp.size(); ++c)
+    if (cells.cell[c].m > 0.0) {
+      heavy.push_back(c);
+      const Vec<D> x = fp.site(c);
+      sites.insert(sites.end(), x.data(), x.data() + D);
+    }
+  const auto mine = part.owns(sites);
+  elsewhere.assign(fp.size(), 0);
+  for (std::size_t i = 0; i < heavy.size(); ++i) elsewhere[heavy[i]] = !mine[i];
+}
+
 /// The end of the multi-level remap: nearly empty cells handed on, one particle per kept cell with h ramped
-/// towards coarser blocks, and the blocks' levels stored for the next remap.
+/// towards coarser blocks (on many ranks, per cell this rank keeps), and the blocks' levels stored for the next
+/// remap.
 template <int D, bool E, class Criterion, class Field, class Levels>
 void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml, const RemapParams& params,
                     const CellGrid<D>& grid, const Footprint<D>& fp, const Field& field, const Levels& level,
                     const BlockIndex<D>& block0, Sums<D>& cells, const std::vector<double>& cell_volume,
                     RemapWorkspace<D>& ws, RemapStats& stats, const RankPart& part) {
   auto& keep = ws.keep;
+  flag_kept_elsewhere(fp, cells, part, ws.elsewhere);
   hand_on_sparse_cells<D>(
       cells, params, [&](std::size_t c) { return cell_volume[c]; },
-      [&](std::size_t c, auto&& f) { for_each_ring_neighbour(grid, fp, c, f); }, stats.dropped_cells, keep, part);
+      [&](std::size_t c, auto&& f) { for_each_ring_neighbour(grid, fp, c, f); }, stats.dropped_cells, keep, part,
+      ws.elsewhere);
+  for (std::size_t c = 0; c < ws.elsewhere.size(); ++c)
+    if (ws.elsewhere[c]) keep[c] = 0;
   const std::size_t n_cells = fp.size();
   const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;
   auto& order = ws.order;
@@ -229,24 +254,10 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
     }
     return std::pair{site, h};
   };
-  emit_particles(p, cells, keep, order, place, stats);
+  emit_particles(p, cells, keep, order, place, stats, part.own);
   stats.per_level.assign(static_cast<std::size_t>(ml.max_level) + 1, 0);
-  std::vector<std::size_t> emitted;
   for (std::size_t c = 0; c < n_cells; ++c)
-    if (keep[c] && cells.cell[c].m > 0.0) emitted.push_back(c);
-  if (part.on_ranks()) {  // only the sites this rank keeps (mpi::Decomposition::keep_owned_sites drops the others)
-    std::vector<double> sites;
-    for (const std::size_t c : emitted) {
-      const Vec<D> x = fp.site(c);
-      sites.insert(sites.end(), x.data(), x.data() + D);
-    }
-    const auto mine = part.owns(sites);
-    std::size_t kept = 0;
-    for (std::size_t i = 0; i < emitted.size(); ++i)
-      if (mine[i]) emitted[kept++] = emitted[i];
-    emitted.resize(kept);
-  }
-  for (const std::size_t c : emitted) ++stats.per_level[static_cast<std::size_t>(fp.level[c])];
+    if (keep[c] && cells.cell[c].m > 0.0) ++stats.per_level[static_cast<std::size_t>(fp.level[c])];
   std::map<std::array<std::int64_t, D>, int> levels;
   for (std::size_t b = 0; b < level.size(); ++b) levels[absolute_block(field, block0, b)] = level[b];
   ml.store_levels(std::move(levels));

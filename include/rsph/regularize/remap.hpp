@@ -142,10 +142,12 @@ Sums<D>& accumulate_overlaps(const ParticleSet<D, E>& p, const Box<D>& box, cons
 /// so shares flow towards kept cells along rising mass); a cell with no such neighbour keeps its particle.
 /// `volume(c)` is the volume of cell c; `for_each_neighbour(c, f)` calls f(g) for the cells g next to c.
 /// Fills the keep flags; `handed_on` counts the cells whose share moved.
-/// `part`: on many ranks, the heaviest is every rank's.
+/// `part`: on many ranks, the heaviest is every rank's. `elsewhere` (empty in one process): the cells another
+/// rank keeps, whose hand-on is read here and counted there.
 template <int D, class Volume, class ForEachNeighbour>
 void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume, ForEachNeighbour&& for_each_neighbour,
-                          std::size_t& handed_on, std::vector<std::uint8_t>& keep, const RankPart& part = {}) {
+                          std::size_t& handed_on, std::vector<std::uint8_t>& keep, const RankPart& part = {},
+                          std::span<const std::uint8_t> elsewhere = {}) {
   const std::size_t n_cells = S.size();
   keep.resize(n_cells);
   double heaviest = 0.0;
@@ -193,7 +195,7 @@ void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume
       moved_fill[b] += S.cell[c].volume + moved_fill[c];  // the volume goes with the mass (rho = m / volume)
       moved_fill[c] = 0.0;
       S.cell[c] = Conserved<D>{0.0, Vec<D>::Zero(), 0.0, S.cell[c].volume};
-      ++handed_on;
+      handed_on += elsewhere.empty() || !elsewhere[c];
       moved = true;
     }
   }
@@ -206,13 +208,15 @@ void hand_on_sparse_cells(Sums<D>& S, const RemapParams& params, Volume&& volume
 /// Replaces `p` by one new particle per kept cell, in the order of `cells`: eq. (6) mass, eq. (8)
 /// velocity, and u taking up the kinetic energy the averaging removed (eq. 9); rho is set to the mass over
 /// the covered volume (a kernel-summed density overwrites it). `place(c)` gives the
-/// site and smoothing length of cell c.
+/// site and smoothing length of cell c. The statistics count the first `n_own` old particles (on many ranks this
+/// rank's own, before the others' it gathered) and every new one.
 template <int D, bool E, class Place>
 void emit_particles(ParticleSet<D, E>& p, const Sums<D>& S, const std::vector<std::uint8_t>& keep,
-                    const std::vector<std::size_t>& cells, Place&& place, RemapStats& stats) {
+                    const std::vector<std::size_t>& cells, Place&& place, RemapStats& stats,
+                    std::size_t n_own = std::numeric_limits<std::size_t>::max()) {
+  stats.n_before = std::min(n_own, p.n_real);
   double ke_before = 0.0;
-  for (std::size_t a = 0; a < p.n_real; ++a) ke_before += 0.5 * p.m[a] * p.v[a].squaredNorm();
-  stats.n_before = p.n_real;
+  for (std::size_t a = 0; a < stats.n_before; ++a) ke_before += 0.5 * p.m[a] * p.v[a].squaredNorm();
   auto emitted = [&](std::size_t c) { return keep[c] && S.cell[c].m > 0.0; };
   // Written in parallel, each thread a contiguous run of `cells`, in the order of `cells` whatever the thread
   // count. The old particles are spent (their sums are in S): the new ones take over their storage, every
@@ -278,7 +282,7 @@ void hand_on_and_emit(ParticleSet<D, E>& p, Sums<D>& S, const RemapParams& param
           if (const std::int64_t e = S.find(g); e >= 0) f(static_cast<std::size_t>(e));
         });
       },
-      stats.dropped_cells, keep, part);
+      stats.dropped_cells, keep, part, ws.elsewhere);
   for (std::size_t c = 0; c < ws.elsewhere.size(); ++c)
     if (ws.elsewhere[c]) keep[c] = 0;  // another rank's cell: its hand-on was read, its particle is born there
   auto& order = ws.order;
@@ -290,7 +294,7 @@ void hand_on_and_emit(ParticleSet<D, E>& p, Sums<D>& S, const RemapParams& param
       [&](std::size_t c) {
         return std::pair{site(S.flat(c)), h_new};
       },
-      stats);
+      stats, part.own);
   stats.per_level = {stats.n_after};
 }
 

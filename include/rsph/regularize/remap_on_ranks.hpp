@@ -22,9 +22,10 @@ namespace rsph::regularize {
 namespace detail {
 
 /// One rank's part of the remap, after add_remap_halo: the cells of `cells` (this rank's own n_own when empty)
-/// built and remapped; returns which rank keeps each new site. `reach`: the kernel's support times h_max.
+/// built and remapped, and the new particles of the sites this rank keeps emitted. `reach`: the kernel's support
+/// times h_max.
 template <class Domain, class Particles, int D, class Reg>
-auto remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo info, std::size_t n_own, double reach,
+void remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo info, std::size_t n_own, double reach,
                 std::vector<std::uint32_t> cells = {}) {
   if (cells.empty()) {
     cells.resize(n_own);
@@ -50,7 +51,6 @@ auto remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo i
     part.ranks = d.ranks();
   }
   reg.remap(p, box, info);
-  return owners;
 }
 
 }  // namespace detail
@@ -61,7 +61,7 @@ auto remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo i
 /// this rank's own particles only and completes the new cells' sums with the other ranks' parts; it gathers the
 /// others' particles out to a short reach, and half as far again, on every rank, where some rank's cells reach
 /// beyond (Decomposition::gather_farther). The others build the cells of the other ranks' particles near this
-/// rank's too, and drop the new particles that another rank keeps. `support`: the kernel's, in units of h.
+/// rank's too, and emit only the new particles of the sites this rank keeps. `support`: the kernel's, in units of h.
 /// Returns the kinetic energy the remap removed over all ranks.
 template <class Domain, class Particles, int D, class Reg>
 double remap_on_ranks(Domain& d, Particles& p, const Box<D>& box, Reg& reg, const StepInfo& info, double support) {
@@ -79,13 +79,12 @@ double remap_on_ranks(Domain& d, Particles& p, const Box<D>& box, Reg& reg, cons
         d.gather_farther(p, n_own);
       }
     }
-    d.renumber(p);  // the remap emitted only the cells this rank keeps
   } else {
     const std::size_t n_own = d.add_remap_halo(p, box, d.remap_reach_in_h() * h_max);
-    const auto owners = detail::remap_part(d, p, box, reg, info, n_own, support * h_max,
-                                           d.remap_cells(p, box, n_own, 0.5 * d.remap_reach_in_h() * h_max));
-    d.keep_owned_sites(p, owners);
+    detail::remap_part(d, p, box, reg, info, n_own, support * h_max,
+                       d.remap_cells(p, box, n_own, 0.5 * d.remap_reach_in_h() * h_max));
   }
+  d.renumber(p);  // the remap emitted only the sites this rank keeps
   const auto after = d.totals(p);
   if (!(std::abs(after.mass - before.mass) <= 1e-12 * before.mass))
     throw NumericalError("the remap on " + std::to_string(d.ranks()) + " ranks changed the mass by " +

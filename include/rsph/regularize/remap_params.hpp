@@ -132,6 +132,34 @@ struct RemapStats {
   }
 };
 
+/// One remap's figures over every rank's part of it, on every rank: the counts and the kinetic energy converted
+/// summed; the worst volume mismatch, and the figures every rank finds alike (the blocks capped, the level asked,
+/// the passes), their largest. In one process, `s` itself.
+inline RemapStats over_ranks(RemapStats s, const RankPart& part) {
+  if (!part.on_ranks()) return s;
+  std::vector<double> sums{static_cast<double>(s.n_before),
+                           static_cast<double>(s.n_after),
+                           s.kinetic_converted,
+                           static_cast<double>(s.dropped_cells),
+                           static_cast<double>(s.first_order_cells),
+                           static_cast<double>(s.limited_cells)};
+  for (const std::size_t n : s.per_level) sums.push_back(static_cast<double>(n));  // alike in length on every rank
+  part.sum_over_ranks(sums);
+  auto count = [&](std::size_t k) { return static_cast<std::size_t>(sums[k]); };  // exact below 2^53
+  s.n_before = count(0);
+  s.n_after = count(1);
+  s.kinetic_converted = sums[2];
+  s.dropped_cells = count(3);
+  s.first_order_cells = count(4);
+  s.limited_cells = count(5);
+  for (std::size_t l = 0; l < s.per_level.size(); ++l) s.per_level[l] = count(6 + l);
+  s.max_volume_mismatch = part.max(s.max_volume_mismatch);
+  s.capped_blocks = static_cast<std::size_t>(part.max(static_cast<double>(s.capped_blocks)));
+  s.requested_level = static_cast<int>(part.max(s.requested_level));
+  s.passes = static_cast<int>(part.max(s.passes));
+  return s;
+}
+
 /// The sum of one figure over a log of records holding RemapStats as `stats`.
 template <class Log, class T>
 T total(const Log& log, T RemapStats::*figure) {

@@ -269,6 +269,23 @@ void hand_out_above_floor(const ParticleSet<D, E>& p, std::size_t n_old, const S
   }
 }
 
+/// The old cells among the first n_own (on many ranks, this rank's own) that the limiter cut in the last hand-out,
+/// counted again after a remap that built other ranks' cells too.
+template <int D>
+std::size_t limited_among(const Workspace<D>& ws, std::size_t n_own) {
+  std::size_t n = 0;
+  for (std::size_t a = 0; a < std::min(n_own, ws.recon.size()); ++a) n += ws.recon[a].limited;
+  return n;
+}
+
+/// The old cells among the first n_own that hand out at first order.
+template <int D>
+std::size_t first_order_among(const Workspace<D>& ws, std::size_t n_own) {
+  return static_cast<std::size_t>(std::count(
+      ws.first_order.begin(),
+      ws.first_order.begin() + static_cast<std::ptrdiff_t>(std::min(n_own, ws.first_order.size())), std::uint8_t{1}));
+}
+
 /// The second-order sums on the cells of `grid`: every old cell built and kept, its gradients fitted, its
 /// pieces listed and handed out; lands in ws.sums[0], dense over the grid or, past
 /// params.dense_cells_per_particle cells per particle and where `allow_sparse`, over the cells that receive a
@@ -307,7 +324,7 @@ detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box
   }
   w2.first_order.assign(p.n_real, 0);
   hand_out_above_floor(p, n_fit, second, n_cells, ws, w2, stats, owners);
-  for (const auto& r : w2.recon) stats.limited_cells += r.limited;
+  for (std::size_t a = 0; a < n_fit; ++a) stats.limited_cells += w2.recon[a].limited;
   stats.max_volume_mismatch = ws.sums[0].max_mismatch;
   if (sparse) ws.sums[0].index_by(std::move(cells));
   return ws.sums[0];

@@ -33,6 +33,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
     auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false,
                                               part.cells);
     if constexpr (D == 2) ws.reach = w2.cells.reach;  // the face hand-out builds again the cells reaching a face
+    if (part.on_ranks()) stats.limited_cells = second_order::limited_among(w2, part.own);  // others' built here too
     return S;
   };
   auto at_faces = [&](const auto& fp, const detail::Faces& faces, RemapStats& stats) -> detail::Sums<D>& {
@@ -45,7 +46,9 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
     }
     return ws.sums[0];
   };
-  return detail::remap_onto_levels(p, box, ml, builder, params, region, ws, grid, sums_on, at_faces, part);
+  auto stats = detail::remap_onto_levels(p, box, ml, builder, params, region, ws, grid, sums_on, at_faces, part);
+  if (part.on_ranks()) stats.first_order_cells = second_order::first_order_among(w2, part.own);
+  return stats;
 }
 
 }  // namespace rsph::regularize
