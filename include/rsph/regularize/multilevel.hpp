@@ -317,7 +317,7 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   RemapWorkspace<D> local;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   const auto fine = ml.finest();
-  detail::check_remap_input(p, fine, params);
+  detail::check_remap_input(p, fine, params, part);
   detail::check_whole_blocks(box, ml);
   const auto grid =
       detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells, part);

@@ -348,13 +348,16 @@ void with_cells_of_ranks(const ParticleSet<D, E>& p, const Box<D>& box, const La
   }
 }
 
+/// The remap's input, refused with the cause. `part`: on many ranks, a rank may hold no particles (it takes part in
+/// the remap's exchanges all the same); the run must.
 template <class Lattice, int D, bool E>
-void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const RemapParams& params) {
+void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const RemapParams& params,
+                       const RankPart& part = {}) {
   static_assert(Lattice::dim == D, "the lattice's dimension differs from the particles'");
   params.validate();
   require(lattice.spacing > 0.0, "regularization: the lattice spacing must be positive");
   require(p.n_ghost() == 0, "regularization: remove ghosts before remapping");
-  require(p.n_real > 0, "regularization: no particles to remap");
+  require(part.max(static_cast<double>(p.n_real)) > 0.0, "regularization: no particles to remap");
   auto refuse = [](std::size_t a, const std::string& what) {
     throw InputError("regularization: particle " + std::to_string(a) + ": " + what);
   };
@@ -369,7 +372,7 @@ void check_remap_input(const ParticleSet<D, E>& p, const Lattice& lattice, const
         refuse(a, "internal energy must be finite and non-negative (got " + std::to_string(p.u[a]) + ")");
     total += p.m[a];
   }
-  require(total > 0.0, "regularization: every mass is zero: nothing to remap");
+  require(part.max(total) > 0.0, "regularization: every mass is zero: nothing to remap");
 }
 
 }  // namespace detail
@@ -383,7 +386,7 @@ template <class Lattice, class Builder, int D, bool E, class Region = region::Un
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, const Lattice& lattice, Builder& builder,
                               const RemapParams& params, const Region& region = {},
                               RemapWorkspace<D>* workspace = nullptr, const RankPart& part = {}) {
-  detail::check_remap_input(p, lattice, params);
+  detail::check_remap_input(p, lattice, params, part);
   RemapWorkspace<D> local;
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   const auto grid = detail::new_cells(p, box, lattice, params, part);

@@ -344,7 +344,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, const Lat
                               const RankPart& part = {}) {
   static_assert(check_closing_region<Region, D>());
   static_assert(D > 1 || !Region::clips, "closing regions are for 2D and 3D cells");
-  detail::check_remap_input(p, lattice, params);
+  detail::check_remap_input(p, lattice, params, part);
   second.validate();
   RemapWorkspace<D> local;
   second_order::Workspace<D> local2;

@@ -25,7 +25,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   RemapWorkspace<D>& ws = workspace ? *workspace : local;
   second_order::Workspace<D>& w2 = ws2 ? *ws2 : local2;
   const auto fine = ml.finest();
-  detail::check_remap_input(p, fine, params);
+  detail::check_remap_input(p, fine, params, part);
   detail::check_whole_blocks(box, ml);
   const auto grid =
       detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells, part);
