@@ -153,9 +153,19 @@ TEST_CASE(
                                      std::span<const double>(p.m.data(), p.n_real), reach, part);
   REQUIRE(sites.n_cells == whole.n_cells);
   CHECK(sites.phase == whole.phase);
-  std::size_t built = 0;
-  for (std::size_t c = 0; c < sites.n_cells; ++c) built += sites.cell_start[c + 1] > sites.cell_start[c] ? 1 : 0;
-  CHECK(built < 3 * sites.n_cells / 4);  // the cells left of the part are not built
+  // the part holds the sites near its old cells, an arc of each ring: its memory follows its gas
+  CHECK(sites.n_held() < 3 * sites.n_cells / 4);
+  std::size_t near = 0, near_held = 0, moved = 0;
+  for (std::size_t c = 0; c < whole.n_cells; ++c) {
+    bool close = false;
+    for (const auto a : mine) close = close || (whole.site(c) - p.x[a]).norm() <= reach + 1.5 * rings.spacing;
+    near += close;
+    near_held += close && sites.slot(c) >= 0;
+    moved += sites.site(c) != whole.site(c);  // held or placed when asked for, the same bits
+  }
+  CHECK(near_held == near);
+  CHECK(near > sites.n_cells / 3);
+  CHECK(moved == 0);
   geometry::LocalVoronoi builder;
   std::vector<double> closing(p.n_real, 0.75 * rings.spacing);
   std::vector<std::vector<std::pair<std::size_t, double>>> pieces(p.n_real), pieces_whole(p.n_real);
@@ -180,6 +190,20 @@ TEST_CASE(
     listed += pieces[a].size();
   }
   CHECK(listed > 3 * mine.size());
+}
+
+TEST_CASE("rings lattice: the arc of a ring a part holds is the ring less the largest gap, round its end too",
+          "[regularize]") {
+  using Arcs = std::vector<std::pair<std::int64_t, std::int64_t>>;
+  // sites 2-4 and 7-8 of 10: the gap 9, 0, 1 is the largest
+  CHECK(lattice::detail::largest_gap(Arcs{{2, 4}, {7, 8}}, 10) == std::pair<std::int64_t, std::int64_t>{9, 3});
+  // 0-3 and 8-11 (8, 9, 0, 1): the gap 4-7
+  CHECK(lattice::detail::largest_gap(Arcs{{0, 3}, {8, 11}}, 10) == std::pair<std::int64_t, std::int64_t>{4, 4});
+  // 5-13 round the end leaves site 4 (14 round the ring)
+  CHECK(lattice::detail::largest_gap(Arcs{{5, 13}}, 10) == std::pair<std::int64_t, std::int64_t>{14, 1});
+  // 1-6 and 4-10 of 11 leave site 0 (11 round the ring); 3-12 of 10 covers all
+  CHECK(lattice::detail::largest_gap(Arcs{{1, 6}, {4, 10}}, 11) == std::pair<std::int64_t, std::int64_t>{11, 1});
+  CHECK(lattice::detail::largest_gap(Arcs{{3, 12}}, 10).second == 0);
 }
 
 TEST_CASE("rings lattice: gas on circular orbits returns to its sites with its own mass, momentum and energy",

@@ -20,22 +20,28 @@
 #include <numbers>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rsph::lattice {
 
 /// The sites of a Rings lattice at one remap: the rings in use, each turned by its phase, and once
-/// build_cells has run, every site's Voronoi cell and what the candidate lookup needs of each ring.
-/// Sites are numbered ring by ring from the innermost, each ring counter-clockwise.
+/// build_cells has run, the Voronoi cells of the sites held and what the candidate lookup needs of each ring.
+/// Sites are numbered ring by ring from the innermost, each ring counter-clockwise. Every site's position is
+/// known from its ring; the sites held (every one, or on many ranks an arc of each ring around a rank's gas,
+/// hold()) also keep their position and cell, in slots of their own, so that a rank's memory follows its gas.
 struct RingSites {
   double spacing = 0.0;
-  std::int64_t first_ring = 0;           ///< the lattice's index of the innermost ring here
-  std::vector<double> radius, phase;     ///< per ring: r_i, and the angle site 0 lies half a step past
-  std::vector<std::size_t> offset{0};    ///< per ring and one past the last: its first site's number
-  std::vector<Vec<2>> xy;                ///< every site (place() sets them from the phases)
-  std::vector<std::size_t> cell_start;   ///< per site and one past the last: its first vertex (none: not built)
+  std::int64_t first_ring = 0;         ///< the lattice's index of the innermost ring here
+  std::vector<double> radius, phase;   ///< per ring: r_i, and the angle site 0 lies half a step past
+  std::vector<std::size_t> offset{0};  ///< per ring and one past the last: its first site's number
+  /// Per ring: the first site held (its index on the ring), how many follow it (wrapping), and the first slot.
+  std::vector<std::int64_t> held_first, held_count;
+  std::vector<std::size_t> held_offset{0};
+  std::vector<Vec<2>> xy;                ///< every site held, by slot (place() sets them from the phases)
+  std::vector<std::size_t> cell_start;   ///< per slot and one past the last: its first vertex (none: not built)
   std::vector<Vec<2>> vertices;          ///< every cell's vertices, relative to its site, counter-clockwise
-  std::vector<geometry::Bounds> bounds;  ///< every cell's bounding box, relative to its site
+  std::vector<geometry::Bounds> bounds;  ///< every held cell's bounding box, relative to its site
   /// Per ring: the least and largest distance of its cells from the origin, and the most any cell reaches
   /// in angle (seen from the origin) from its site's angle; pi where a cell holds the origin.
   std::vector<double> reach_lo, reach_hi, reach_angle;
@@ -48,15 +54,56 @@ struct RingSites {
   std::size_t ring_of(std::size_t c) const {
     return static_cast<std::size_t>(std::upper_bound(offset.begin(), offset.end(), c) - offset.begin()) - 1;
   }
-  Vec<2> site(std::size_t c) const { return xy[c]; }
-  /// Sets every site from its ring's radius and phase.
+  /// Holds every site (the serial remap, and a scene's start).
+  void hold_all() {
+    held_first.assign(rings(), 0);
+    held_count.resize(rings());
+    for (std::size_t k = 0; k < rings(); ++k) held_count[k] = sites_on(k);
+    held_offset = offset;
+    all_held = true;
+  }
+  /// Holds on each ring k the held_count[k] sites from held_first[k] on (wrapping round the ring).
+  void hold(std::vector<std::int64_t> first, std::vector<std::int64_t> count) {
+    held_first = std::move(first);
+    held_count = std::move(count);
+    held_offset.assign(1, 0);
+    all_held = true;
+    for (std::size_t k = 0; k < rings(); ++k) {
+      held_offset.push_back(held_offset.back() + static_cast<std::size_t>(held_count[k]));
+      all_held = all_held && held_first[k] == 0 && held_count[k] == sites_on(k);
+    }
+  }
+  std::size_t n_held() const { return held_offset.back(); }
+  /// Site c's slot among the held sites; -1 where it is not held.
+  std::int64_t slot(std::size_t c) const {
+    if (all_held) return static_cast<std::int64_t>(c);
+    const std::size_t k = ring_of(c);
+    std::int64_t d = static_cast<std::int64_t>(c - offset[k]) - held_first[k];  // in (-N_k, N_k)
+    if (d < 0) d += sites_on(k);
+    return d < held_count[k] ? static_cast<std::int64_t>(held_offset[k]) + d : -1;
+  }
+  /// The site held in slot i.
+  std::size_t site_in(std::size_t i) const {
+    if (all_held) return i;
+    const std::size_t k =
+        static_cast<std::size_t>(std::upper_bound(held_offset.begin(), held_offset.end(), i) - held_offset.begin()) - 1;
+    const auto n = sites_on(k);
+    return offset[k] + static_cast<std::size_t>((held_first[k] + static_cast<std::int64_t>(i - held_offset[k])) % n);
+  }
+  /// Site c's position: its ring's radius at its angle (the same bits whether held or not).
+  Vec<2> site(std::size_t c) const {
+    if (const std::int64_t i = slot(c); i >= 0) return xy[static_cast<std::size_t>(i)];
+    return place_site(c);
+  }
+  Vec<2> place_site(std::size_t c) const {
+    const std::size_t k = ring_of(c);
+    const double a = angle(k, static_cast<std::int64_t>(c - offset[k]));
+    return radius[k] * Vec<2>(std::cos(a), std::sin(a));
+  }
+  /// Sets every site held from its ring's radius and phase.
   void place() {
-    xy.resize(n_cells);
-    for (std::size_t k = 0; k < rings(); ++k)
-      for (std::size_t c = offset[k]; c < offset[k + 1]; ++c) {
-        const double a = angle(k, static_cast<std::int64_t>(c - offset[k]));
-        xy[c] = radius[k] * Vec<2>(std::cos(a), std::sin(a));
-      }
+    xy.resize(n_held());
+    for (std::size_t i = 0; i < xy.size(); ++i) xy[i] = place_site(site_in(i));
   }
   /// The site of ring k nearest in angle to phi (wrapped into the ring).
   std::int64_t nearest(std::size_t k, double phi) const {
@@ -70,19 +117,27 @@ struct RingSites {
     const std::size_t k = ring_of(c);
     return step(k) * radius[k] * spacing;
   }
-  /// Whether cell c's bounding box meets the box b (both relative to `origin`).
+  /// Whether cell c's bounding box meets the box b (both relative to `origin`); a cell not held or not built
+  /// meets none.
   bool box_meets(std::size_t c, const Vec<2>& origin, const geometry::Bounds& b) const {
-    const Vec<2> shift = xy[c] - origin;
-    return bounds[c].lo.x() + shift.x() < b.hi.x() && bounds[c].hi.x() + shift.x() > b.lo.x() &&
-           bounds[c].lo.y() + shift.y() < b.hi.y() && bounds[c].hi.y() + shift.y() > b.lo.y();
+    const std::int64_t slot_c = slot(c);
+    if (slot_c < 0) return false;
+    const auto i = static_cast<std::size_t>(slot_c);
+    const Vec<2> shift = xy[i] - origin;
+    return bounds[i].lo.x() + shift.x() < b.hi.x() && bounds[i].hi.x() + shift.x() > b.lo.x() &&
+           bounds[i].lo.y() + shift.y() < b.hi.y() && bounds[i].hi.y() + shift.y() > b.lo.y();
   }
-  /// At least cell c's diameter: its bounding box's diagonal.
-  double diameter(std::size_t c) const { return (bounds[c].hi - bounds[c].lo).norm(); }
-  /// Cell c relative to `origin`.
+  /// At least cell c's diameter: its bounding box's diagonal (a cell that box_meets).
+  double diameter(std::size_t c) const {
+    const auto i = static_cast<std::size_t>(slot(c));
+    return (bounds[i].hi - bounds[i].lo).norm();
+  }
+  /// Cell c relative to `origin` (a cell that box_meets).
   geometry::ConvexPolygon cell(std::size_t c, const Vec<2>& origin) const {
+    const auto i = static_cast<std::size_t>(slot(c));
     geometry::ConvexPolygon out;
-    const Vec<2> shift = site(c) - origin;
-    for (std::size_t v = cell_start[c]; v < cell_start[c + 1]; ++v) out.push(vertices[v] + shift);
+    const Vec<2> shift = xy[i] - origin;
+    for (std::size_t v = cell_start[i]; v < cell_start[i + 1]; ++v) out.push(vertices[v] + shift);
     return out;
   }
   /// f(g) for the sites next to c: its two neighbours on its ring and the three nearest on each ring beside.
@@ -107,6 +162,9 @@ struct RingSites {
   /// cells of the sites it marks and of the innermost and outermost rings; the others have no vertices and
   /// meet no box, so no lookup names them.
   void build_cells(double edge_extent, const std::vector<std::uint8_t>& wanted = {});
+
+ private:
+  bool all_held = true;
 };
 
 namespace detail {
@@ -183,6 +241,89 @@ inline geometry::ConvexPolygon voronoi_cell(const RingSites& s, std::size_t c, s
   return cell;
 }
 
+/// The largest arc of ring sites 0..n-1 that none of the intervals [lo, hi] of site indices (lo in [0, n),
+/// hi < lo + n, sorted by lo) covers, as its first site and length; length 0 where they cover the ring.
+inline std::pair<std::int64_t, std::int64_t> largest_gap(const std::vector<std::pair<std::int64_t, std::int64_t>>& in,
+                                                         std::int64_t n) {
+  std::vector<std::pair<std::int64_t, std::int64_t>> gaps;
+  std::int64_t end = in.front().second;
+  for (std::size_t i = 1; i < in.size(); ++i) {
+    if (in[i].first > end + 1) gaps.emplace_back(end + 1, in[i].first - 1);
+    end = std::max(end, in[i].second);
+  }
+  gaps.emplace_back(end + 1, in.front().first + n - 1);  // round past site n - 1
+  const std::int64_t tail = end - n;                     // the intervals reach round to site `tail`
+  std::pair<std::int64_t, std::int64_t> best{0, 0};
+  for (auto [a, b] : gaps) {
+    if (b < n) a = std::max(a, tail + 1);
+    if (b - a + 1 > best.second) best = {a, b - a + 1};
+  }
+  return best;
+}
+
+/// The arc of each ring (its first site and length) that holds every site within `w` of one of the points, and
+/// the whole of the innermost and outermost rings. A site on ring k (radius r_k) at angle d from a point at
+/// radius r lies at least 2 sqrt(r r_k) sin(d/2) from it, and |r - r_k| across. The points are taken in order of
+/// angle, so that each ring's windows mostly join the one before and few are kept.
+inline std::pair<std::vector<std::int64_t>, std::vector<std::int64_t>> arcs_near(const RingSites& s,
+                                                                                 std::span<const Vec<2>> points,
+                                                                                 double w) {
+  using Arc = std::pair<std::int64_t, std::int64_t>;
+  const std::size_t n_rings = s.rings();
+  std::vector<std::pair<double, double>> polar(points.size());  // angle, radius
+  for (std::size_t i = 0; i < points.size(); ++i)
+    polar[i] = {std::atan2(points[i].y(), points[i].x()), points[i].norm()};
+  std::sort(polar.begin(), polar.end());
+  std::vector<std::vector<Arc>> near(n_rings);
+  std::vector<Arc> open(n_rings, Arc{0, -1});  // per ring: the window growing now (empty: hi < lo)
+  std::vector<std::uint8_t> whole(n_rings, 0);
+  whole.front() = whole.back() = 1;
+  for (const auto& [phi, r] : polar) {
+    const auto k_lo = static_cast<std::int64_t>(std::floor((r - w - s.radius.front()) / s.spacing)) - 1;
+    for (std::int64_t ki = std::max<std::int64_t>(k_lo, 1);
+         ki < static_cast<std::int64_t>(n_rings) - 1 && s.radius[static_cast<std::size_t>(ki)] <= r + w; ++ki) {
+      const auto k = static_cast<std::size_t>(ki);
+      if (whole[k] || std::abs(r - s.radius[k]) > w) continue;
+      const double sine = w / (2.0 * std::sqrt(r * s.radius[k]));
+      if (!(sine < 1.0)) {
+        whole[k] = 1;
+        continue;
+      }
+      const double d = 2.0 * std::asin(sine) + 1e-9;
+      const Arc arc{static_cast<std::int64_t>(std::ceil((phi - d - s.phase[k]) / s.step(k) - 0.5)) - 1,
+                    static_cast<std::int64_t>(std::floor((phi + d - s.phase[k]) / s.step(k) - 0.5)) + 1};
+      Arc& now = open[k];
+      if (now.second >= now.first && arc.first <= now.second + 1 && arc.second >= now.first - 1) {
+        now = {std::min(now.first, arc.first), std::max(now.second, arc.second)};  // joins the window
+        continue;
+      }
+      if (now.second >= now.first) near[k].push_back(now);
+      now = arc;
+    }
+  }
+  std::vector<std::int64_t> first(n_rings, 0), count(n_rings, 0);
+  for (std::size_t k = 0; k < n_rings; ++k) {
+    const auto n = s.sites_on(k);
+    if (open[k].second >= open[k].first) near[k].push_back(open[k]);
+    for (auto& [lo, hi] : near[k]) {  // lo into [0, n); a window of a whole ring or more holds it all
+      if (hi - lo + 1 >= n) whole[k] = 1;
+      const std::int64_t shift = lo - ((lo % n) + n) % n;
+      lo -= shift;
+      hi -= shift;
+    }
+    if (whole[k]) {
+      count[k] = n;
+      continue;
+    }
+    if (near[k].empty()) continue;
+    std::sort(near[k].begin(), near[k].end());
+    const auto [gap_first, gap] = largest_gap(near[k], n);
+    count[k] = n - gap;
+    first[k] = gap == 0 ? 0 : (gap_first + gap) % n;
+  }
+  return {std::move(first), std::move(count)};
+}
+
 /// Whether each site lies within `w` of one of the points.
 inline std::vector<std::uint8_t> sites_near(std::span<const Vec<2>> sites, const std::vector<Vec<2>>& points,
                                             double w) {
@@ -205,22 +346,23 @@ inline std::vector<std::uint8_t> sites_near(std::span<const Vec<2>> sites, const
 /// the three nearest on each ring beside. Any other site lies at least 1.8 Delta off (two along its own ring:
 /// 2 Delta; two along a ring beside: 1.5 steps along and Delta across; two rings away: 2 Delta), so it cannot
 /// cut a cell that reaches less than 0.9 Delta; a cell reaching further is built again among two rings and
-/// three sites each way, and refused if it still reaches beyond 1.2 Delta.
+/// three sites each way, and refused if it still reaches beyond 1.2 Delta. Only the sites held have cells;
+/// `wanted`, where not empty, marks by slot those whose cells are built.
 inline void RingSites::build_cells(double edge_extent, const std::vector<std::uint8_t>& wanted) {
-  const std::size_t n_rings = rings();
+  const std::size_t n_rings = rings(), n_slots = n_held();
   const auto n_threads = static_cast<std::size_t>(max_threads());
   std::vector<std::vector<Vec<2>>> verts(n_threads);  // per thread, its contiguous run of cells in order
-  cell_start.assign(n_cells + 1, 0);
-  bounds.resize(n_cells);
-  run_parallel(n_cells, [&](int t, std::size_t begin, std::size_t end) {
+  cell_start.assign(n_slots + 1, 0);
+  bounds.resize(n_slots);
+  run_parallel(n_slots, [&](int t, std::size_t begin, std::size_t end) {
     auto& own = verts[static_cast<std::size_t>(t)];
     own.clear();
-    for (std::size_t c = begin; c < end; ++c) {
-      const std::size_t k = ring_of(c);
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t c = site_in(i), k = ring_of(c);
       const bool edge = k == 0 || k + 1 == n_rings;
-      if (!edge && !wanted.empty() && !wanted[c]) {
-        cell_start[c + 1] = 0;
-        bounds[c] = {Vec<2>::Constant(std::numeric_limits<double>::infinity()),
+      if (!edge && !wanted.empty() && !wanted[i]) {
+        cell_start[i + 1] = 0;
+        bounds[i] = {Vec<2>::Constant(std::numeric_limits<double>::infinity()),
                      Vec<2>::Constant(-std::numeric_limits<double>::infinity())};
         continue;
       }
@@ -232,22 +374,22 @@ inline void RingSites::build_cells(double edge_extent, const std::vector<std::ui
           throw NumericalError("rings lattice: the cell of site " + std::to_string(c) + " on the ring at r = " +
                                std::to_string(radius[k]) + " reaches beyond 1.2 Delta; too few sites on the ring?");
       }
-      cell_start[c + 1] = static_cast<std::size_t>(cell.n);
-      bounds[c] = geometry::bounds(cell);
+      cell_start[i + 1] = static_cast<std::size_t>(cell.n);
+      bounds[i] = geometry::bounds(cell);
       for (int v = 0; v < cell.n; ++v) own.push_back(cell[v]);
     }
   });
-  for (std::size_t c = 0; c < n_cells; ++c) cell_start[c + 1] += cell_start[c];
+  for (std::size_t i = 0; i < n_slots; ++i) cell_start[i + 1] += cell_start[i];
   vertices.clear();
-  vertices.reserve(cell_start[n_cells]);
+  vertices.reserve(cell_start[n_slots]);
   for (const auto& own : verts) vertices.insert(vertices.end(), own.begin(), own.end());
   reach_lo.assign(n_rings, std::numeric_limits<double>::max());
   reach_hi.assign(n_rings, 0.0);
   reach_angle.assign(n_rings, 0.0);
-  for (std::size_t c = 0; c < n_cells; ++c) {
-    if (cell_start[c + 1] == cell_start[c]) continue;  // not built
-    const std::size_t k = ring_of(c);
-    const auto e = detail::polar_extent(cell(c, Vec<2>::Zero()), Vec<2>::Zero(), xy[c]);
+  for (std::size_t i = 0; i < n_slots; ++i) {
+    if (cell_start[i + 1] == cell_start[i]) continue;  // not built
+    const std::size_t c = site_in(i), k = ring_of(c);
+    const auto e = detail::polar_extent(cell(c, Vec<2>::Zero()), Vec<2>::Zero(), xy[i]);
     reach_lo[k] = std::min(reach_lo[k], e.r_lo);
     reach_hi[k] = std::max(reach_hi[k], e.r_hi);
     reach_angle[k] = std::max({reach_angle[k], -e.angle_lo, e.angle_hi});
@@ -318,6 +460,13 @@ struct Rings {
 
   /// Rings first..last (clamped to the lattice), unturned: the sites a scene starts on.
   RingSites sites(std::int64_t first, std::int64_t last) const {
+    RingSites s = rings_between(first, last);
+    s.hold_all();
+    s.place();
+    return s;
+  }
+  /// Rings first..last (clamped to the lattice), unturned, no site held yet.
+  RingSites rings_between(std::int64_t first, std::int64_t last) const {
     validate();
     first = std::max<std::int64_t>(first, 0);
     last = std::min(last, ring_count() - 1);
@@ -331,7 +480,6 @@ struct Rings {
       s.offset.push_back(s.offset.back() + static_cast<std::size_t>(sites_on(i)));
     }
     s.n_cells = s.offset.back();
-    s.place();
     return s;
   }
   /// The sites gas at x (masses m) is remapped onto: the rings whose bands hold gas, from the innermost to the
@@ -341,8 +489,9 @@ struct Rings {
   /// the integrator's phase error included); a ring without gas keeps phase 0. `reach`: how far an old cell
   /// may reach beyond its particle (the edge rings' cells take in everything that far out).
   /// On many ranks (`part`) the rings and phases are the whole gas's, alike on every rank: the extent is reduced
-  /// over the ranks and each rank adds its own particles' phases. Only the cells that the old cells built here
-  /// (`part.cells`) may meet are built, and the edge rings'.
+  /// over the ranks and each rank adds its own particles' phases. A rank holds only the sites near the old cells
+  /// it builds (`part.cells`), an arc of each ring (and the edge rings whole), and builds the cells those old cells
+  /// may meet, and the edge rings'.
   RingSites following(std::span<const Vec<2>> x, std::span<const double> m, double reach,
                       const regularize::RankPart& part = {}) const {
     require(!x.empty(), "rings lattice: no gas to follow");
@@ -353,14 +502,20 @@ struct Rings {
     }
     g_lo = part.min(g_lo);
     g_hi = part.max(g_hi);
-    RingSites s = sites(ring_at(g_lo), ring_at(g_hi));
+    RingSites s = rings_between(ring_at(g_lo), ring_at(g_hi));
     turn_to_gas(s, x.first(std::min(part.own, x.size())), m, part);
-    s.place();
     std::vector<std::uint8_t> wanted;
     if (part.on_ranks()) {
       std::vector<Vec<2>> near(part.cells.size());
       for (std::size_t i = 0; i < near.size(); ++i) near[i] = x[part.cells[i]];
-      wanted = detail::sites_near(s.xy, near, reach + 1.5 * spacing);  // an inner cell reaches at most 1.2 Delta
+      const double w = reach + 1.5 * spacing;  // an inner cell reaches at most 1.2 Delta
+      auto [first, count] = detail::arcs_near(s, near, w);
+      s.hold(std::move(first), std::move(count));
+      s.place();
+      wanted = detail::sites_near(s.xy, near, w);
+    } else {
+      s.hold_all();
+      s.place();
     }
     const double beyond = std::max(0.0, s.radius.front() - g_lo) + std::max(0.0, g_hi - s.radius.back());
     s.build_cells(beyond + reach + 3.0 * spacing, wanted);
