@@ -153,7 +153,18 @@ class Checkpoints {
 
   /// Reads the checkpoint into sim, the cost and every part; returns the stop the run was heading for.
   std::size_t load(const Checkpointed& sim, RunCost& cost) {
-    auto ar = io::Archive::load(file_, io::Share{std::size_t(this_rank()), std::size_t(rank_count())});
+    const io::Share share{std::size_t(this_rank()), std::size_t(rank_count())};
+#ifdef RSPH_WITH_MPI
+    if (sim.comm) {  // every rank reads its share, together where the ranks write together
+      const mpi::FileTurns turns(*sim.comm);
+      auto ar = io::Archive::load(file_, share, turns.reading());
+      return load_from(ar, sim, cost);
+    }
+#endif
+    auto ar = io::Archive::load(file_, share);
+    return load_from(ar, sim, cost);
+  }
+  std::size_t load_from(io::Archive& ar, const Checkpointed& sim, RunCost& cost) {
     std::string program, parameters;
     ar("run/program", program);
     ar("run/parameters", parameters);

@@ -713,6 +713,24 @@ void check_checkpoint_on_ranks(bool together) {
       const std::size_t n_odd = P > 1 ? 3 : 0;
       CHECK(odd_read == std::vector<double>(n_odd * (part + 1) / parts - n_odd * part / parts, 2.5));
     }
+  if (mpi::parallel_hdf5) {  // read together: every rank its share, each field in one collective call
+    const mpi::FileTurns turns(c);
+    auto ar = io::Archive::load(file, {r, P}, turns.reading());
+    std::vector<std::uint64_t> id_read;
+    std::vector<double> odd_read;
+    double updates_read = -1.0, time_read = -1.0;
+    ar.rows("id", id_read);
+    ar.rows("odd", odd_read);  // 3 rows in all: on 4 ranks rank 0 reads none, and takes part all the same
+    ar.total("updates", updates_read);
+    ar("time", time_read);
+    INFO("read together, part " << r << " of " << P);
+    REQUIRE(id_read.size() == n * (r + 1) / P - n * r / P);
+    for (std::size_t k = 0; k < id_read.size(); ++k) CHECK(id_read[k] == n * r / P + k);
+    const std::size_t n_odd = P > 1 ? 3 : 0;
+    CHECK(odd_read == std::vector<double>(n_odd * (r + 1) / P - n_odd * r / P, 2.5));
+    CHECK(updates_read == (r == 0 ? double(P * (P + 1) / 2) : 0.0));
+    CHECK(time_read == 0.25);
+  }
   c.barrier();
   if (r == 0) std::filesystem::remove(file);
 }

@@ -58,14 +58,16 @@ class Archive {
   static Archive for_saving() { return Archive(); }
   /// An archive that restores fields from `path`, of which this process takes `share` (a contiguous share of
   /// every per-particle field; the totals go to part 0); a missing file or field is an InputError naming it.
-  static Archive load(const std::filesystem::path& path, Share share = {}) {
+  /// `reading`: alone, or together with the other ranks (whose properties must outlive the archive).
+  static Archive load(const std::filesystem::path& path, Share share = {}, Reading reading = {}) {
     Archive ar;
     ar.saving_ = false;
     ar.path_ = path;
     ar.share_ = share;
+    ar.transfer_ = reading.transfer;
     const detail::QuietHdf5 quiet;
     if (!std::filesystem::is_regular_file(path)) throw InputError("no checkpoint '" + path.string() + "'");
-    ar.file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT);
+    ar.file_ = H5Fopen(path.c_str(), H5F_ACC_RDONLY, reading.file_access);
     if (ar.file_ < 0) throw InputError("cannot read the checkpoint '" + path.string() + "'");
     return ar;
   }
@@ -74,6 +76,7 @@ class Archive {
         path_(std::move(o.path_)),
         file_(o.file_),
         share_(o.share_),
+        transfer_(o.transfer_),
         prefix_(std::move(o.prefix_)),
         fields_(std::move(o.fields_)) {
     o.file_ = -1;
@@ -150,14 +153,11 @@ class Archive {
   template <class T>
   void total(const std::string& name, T& value) {
     static_assert(std::is_arithmetic_v<T>, "a total is a single number");
-    if (!saving_ && share_.part > 0) {
-      value = T{};
-      return;
-    }
     const Spread before = spread_;
     spread_ = Spread::total;
-    (*this)(name, value);
+    (*this)(name, value);  // read on every part too: ranks reading together read every field together
     spread_ = before;
+    if (!saving_ && share_.part > 0) value = T{};
   }
 
   /// Saves or restores a list, each element's fields (fields(ar, element)) under name/0/, name/1/, ...
@@ -340,9 +340,16 @@ class Archive {
     const hsize_t first = part ? rows * share_.part / share_.parts * row_size : 0;
     hsize_t count = part ? (rows * (share_.part + 1) / share_.parts) * row_size - first : static_cast<hsize_t>(n);
     v.resize(static_cast<std::size_t>(count));
-    const hid_t whole = H5Dget_space(set), memory = H5Screate_simple(1, &count, nullptr);
-    bool ok = count == 0 || (H5Sselect_hyperslab(whole, H5S_SELECT_SET, &first, nullptr, &count, nullptr) >= 0 &&
-                             H5Dread(set, mem_type, memory, whole, H5P_DEFAULT, v.data()) >= 0);
+    const hsize_t one = 1;  // a process reading no rows together with others still takes part, selecting none
+    const hid_t whole = H5Dget_space(set), memory = H5Screate_simple(1, count > 0 ? &count : &one, nullptr);
+    T none{};
+    bool ok = true;
+    if (count > 0)
+      ok = H5Sselect_hyperslab(whole, H5S_SELECT_SET, &first, nullptr, &count, nullptr) >= 0 &&
+           H5Dread(set, mem_type, memory, whole, transfer_, v.data()) >= 0;
+    else if (transfer_ != H5P_DEFAULT && n > 0)  // an empty field, empty everywhere, is read by none
+      ok = H5Sselect_none(whole) >= 0 && H5Sselect_none(memory) >= 0 &&
+           H5Dread(set, mem_type, memory, whole, transfer_, &none) >= 0;
     H5Sclose(memory);
     H5Sclose(whole);
     H5Dclose(set);
@@ -353,6 +360,7 @@ class Archive {
   std::filesystem::path path_;
   hid_t file_ = -1;
   Share share_;
+  hid_t transfer_ = H5P_DEFAULT;   ///< collective reads where the file was opened together
   Spread spread_ = Spread::first;  ///< of the fields being named now (rows() and total() set it)
   std::string prefix_;
   std::map<std::string, Field> fields_;

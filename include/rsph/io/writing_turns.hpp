@@ -17,6 +17,15 @@
 
 namespace rsph::io {
 
+/// How a process opens a file to read: alone (the default), or together with the other ranks of a
+/// communicator, opened at once through MPI-IO (parallel HDF5: mpi::FileTurns::reading()) and each field's rows
+/// read in one collective call, which MPI-IO may gather into few large reads. Together, every rank must read the
+/// same fields in the same order.
+struct Reading {
+  hid_t file_access = H5P_DEFAULT;
+  hid_t transfer = H5P_DEFAULT;
+};
+
 template <class T>
 concept WritingTurns = requires(const T& t, std::vector<std::uint64_t> counts, std::vector<double> reals,
                                 std::vector<std::int64_t> integers, void (*write_part)()) {

@@ -81,6 +81,8 @@ class FileTurns {
   }
 
   bool together() const { return access_ != H5P_DEFAULT; }
+  /// How the ranks read a checkpoint: together where they write together, else each alone.
+  io::Reading reading() const { return {access_, transfer_}; }
   hid_t file_access() const { return access_; }
   hid_t transfer() const { return transfer_; }
 
