@@ -269,8 +269,8 @@ void hand_out_above_floor(const ParticleSet<D, E>& p, std::size_t n_old, const S
   }
 }
 
-/// The old cells among the first n_own (on many ranks, this rank's own) that the limiter cut in the last hand-out,
-/// counted again after a remap that built other ranks' cells too.
+/// The old cells among the first n_own (on many ranks, this rank's own: a remap may build other ranks' cells too)
+/// that the limiter cut in the last hand-out.
 template <int D>
 std::size_t limited_among(const Workspace<D>& ws, std::size_t n_own) {
   std::size_t n = 0;
@@ -324,7 +324,7 @@ detail::Sums<D>& second_order_sums(const ParticleSet<D, E>& p, const Box<D>& box
   }
   w2.first_order.assign(p.n_real, 0);
   hand_out_above_floor(p, n_fit, second, n_cells, ws, w2, stats, owners);
-  for (std::size_t a = 0; a < n_fit; ++a) stats.limited_cells += w2.recon[a].limited;
+  stats.limited_cells += limited_among(w2, n_fit);
   stats.max_volume_mismatch = ws.sums[0].max_mismatch;
   if (sparse) ws.sums[0].index_by(std::move(cells));
   return ws.sums[0];
