@@ -56,11 +56,9 @@ struct RingSites {
   }
   /// Holds every site (the serial remap, and a scene's start).
   void hold_all() {
-    held_first.assign(rings(), 0);
-    held_count.resize(rings());
-    for (std::size_t k = 0; k < rings(); ++k) held_count[k] = sites_on(k);
-    held_offset = offset;
-    all_held = true;
+    std::vector<std::int64_t> count(rings());
+    for (std::size_t k = 0; k < rings(); ++k) count[k] = sites_on(k);
+    hold(std::vector<std::int64_t>(rings(), 0), std::move(count));
   }
   /// Holds on each ring k the held_count[k] sites from held_first[k] on (wrapping round the ring).
   void hold(std::vector<std::int64_t> first, std::vector<std::int64_t> count) {
