@@ -136,7 +136,10 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("snapshot-every", snapshot_every, "orbits between snapshots");
   flag("map-nr", map_nr, "radial cells of the Sigma map");
   flag("map-nphi", map_nphi, "azimuthal cells of the Sigma map");
+  // no default (--resolution and the preset decide), but the resolved count goes to params.cfg like every flag's,
+  // so that --config and --resume take it
   desc.add_options()("particles", ex::po::value(&s.particles), "particle count over the disk (overrides --resolution)");
+  common.bound.emplace_back("particles", [&s] { return ex::default_text(s.particles); });
   ex::po::variables_map vm;
   if (!ex::parse(argc, argv, desc, vm,
                  "rsph-planet-disk: planet-disk interaction of §5 (de Val-Borro et al. 2006 set-up).\n"
