@@ -10,8 +10,10 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <map>
+#include <numbers>
 #include <random>
 #include <set>
 
@@ -241,6 +243,34 @@ TEST_CASE("Decomposition: shared out, partitioned and migrated, every particle l
   }
 }
 
+namespace {
+
+/// The real particles of `p` (one rank's, with its halos and images) whose points within `width` (how many,
+/// and their summed offsets and velocities) differ from those of the same particle in `serial`.
+int neighbour_mismatches(const ParticleSet<2, false>& p, const ParticleSet<2, false>& serial, double width) {
+  const auto near = [&](const ParticleSet<2, false>& q, const Vec<2>& x) {
+    int n = 0;
+    Vec<2> s = Vec<2>::Zero();
+    for (std::size_t b = 0; b < q.size_with_ghosts(); ++b)
+      if ((q.x[b] - x).norm() < width) {
+        ++n;
+        s += q.x[b] - x + q.v[b];
+      }
+    return std::pair{n, s};
+  };
+  std::map<std::uint64_t, std::size_t> serial_index;
+  for (std::size_t a = 0; a < serial.n_real; ++a) serial_index[serial.id[a]] = a;
+  int mismatches = 0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    const auto [n, s] = near(p, p.x[a]);
+    const auto [n0, s0] = near(serial, serial.x[serial_index.at(p.id[a])]);
+    if (n != n0 || (s - s0).norm() > 1e-12) ++mismatches;
+  }
+  return mismatches;
+}
+
+}  // namespace
+
 TEST_CASE(
     "Decomposition: the halos and images of each rank hold exactly the points a serial run has near its "
     "particles, across periodic faces and reflecting walls",
@@ -268,26 +298,7 @@ TEST_CASE(
   INFO("partition " << method);
   const std::uint64_t one = world().size() > 1 ? 1 : 0;
   CHECK(d.comm().exchanges() == built_after + one);  // every field of the halos in one message from each rank
-  // for each real particle: how many points (real or ghost) lie within width, and their summed offsets
-  const auto near = [&](const ParticleSet<2, false>& q, const Vec<2>& x) {
-    int n = 0;
-    Vec<2> s = Vec<2>::Zero();
-    for (std::size_t b = 0; b < q.size_with_ghosts(); ++b)
-      if ((q.x[b] - x).norm() < width) {
-        ++n;
-        s += q.x[b] - x + q.v[b];
-      }
-    return std::pair{n, s};
-  };
-  std::map<std::uint64_t, std::size_t> serial_index;
-  for (std::size_t a = 0; a < serial.n_real; ++a) serial_index[serial.id[a]] = a;
-  int mismatches = 0;
-  for (std::size_t a = 0; a < p.n_real; ++a) {
-    const auto [n, s] = near(p, p.x[a]);
-    const auto [n0, s0] = near(serial, serial.x[serial_index.at(p.id[a])]);
-    if (n != n0 || (s - s0).norm() > 1e-12) ++mismatches;
-  }
-  CHECK(mismatches == 0);
+  CHECK(neighbour_mismatches(p, serial, width) == 0);
   CHECK(world().sum(std::uint64_t(p.n_real)) == 2000u);
   if (world().size() > 1) CHECK(world().sum(d.counts().halo_points) > 0u);
 
@@ -306,6 +317,74 @@ TEST_CASE(
   for (std::size_t g = p.n_real; g < p.n_real + d.counts().halo_points; ++g)
     wrong += p.rho[g] != f(p.x[g]) || p.P[g] != 3.0 * f(p.x[g]) || tag[g] != std::uint64_t(1e9 * f(p.x[g]));
   CHECK(wrong == 0);
+}
+
+TEST_CASE("Decomposition: a rank's pieces hold its particles, and on a disk send fewer halos than one box round it",
+          "[mpi]") {
+  // an annulus 0.5 < r < 1 of 3000 particles (one h: every particle reaches the width a halo is made for)
+  ParticleSet<2, false> all;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 3000; ++i) {
+    const double r = 0.5 + 0.5 * u(rng), phi = 2.0 * std::numbers::pi * u(rng);
+    all.add(1.0, Vec<2>(r * std::cos(phi), r * std::sin(phi)), Vec<2>(u(rng), u(rng)), 0.02);
+  }
+  Box<2> box;
+  box.lo = Vec<2>(-1.5, -1.5);
+  box.hi = Vec<2>(1.5, 1.5);
+  box.edge = {Edge::open, Edge::open};
+
+  // the pieces: 2^3 of them, every particle inside its piece's box, its reach inside the piece's reach box
+  const auto reach = [&](std::size_t a) { return a % 2 ? 0.04 : 0.02; };
+  const auto pieces = mpi::detail::split_into_pieces<2>(all.x, all.n_real, reach, 3);
+  const auto& box_of = pieces.bounds;
+  REQUIRE(box_of.size() == 8u * 8u);
+  REQUIRE(pieces.piece.size() == 3000u);
+  std::vector<int> members(8, 0);
+  int outside = 0;
+  for (std::size_t a = 0; a < all.n_real; ++a) {
+    REQUIRE(pieces.piece[a] < 8u);
+    const double* b = &box_of[8 * pieces.piece[a]];
+    const auto& x = all.x[a];
+    ++members[pieces.piece[a]];
+    outside += !(x[0] >= b[0] && x[0] <= b[2] && x[1] >= b[1] && x[1] <= b[3] && x[0] - reach(a) >= b[4] &&
+                 x[0] + reach(a) <= b[6] && x[1] - reach(a) >= b[5] && x[1] + reach(a) <= b[7]);
+  }
+  CHECK(outside == 0);
+  double area = 0.0;
+  for (std::size_t l = 0; l < 8; ++l) {
+    CHECK(members[l] > 0);
+    area += (box_of[8 * l + 2] - box_of[8 * l]) * (box_of[8 * l + 3] - box_of[8 * l + 1]);
+  }
+  INFO("the pieces' boxes cover " << area);
+  CHECK(area < 0.9 * 4.0);  // the annulus's box is 2 x 2, its area 2.36; measured 3.42
+  // fewer particles than pieces: the others are empty
+  const auto few = mpi::detail::split_into_pieces<2>(all.x, 3, reach, 3);
+  int empty = 0;
+  for (std::size_t l = 0; l < 8; ++l) empty += few.bounds[8 * l] > few.bounds[8 * l + 2];
+  CHECK(empty == 5);
+
+  // on ranks: the same neighbours as one process with one box a rank or eight, with fewer halos from eight
+  const double width = 0.06;
+  auto serial = all;
+  boundary::make_ghosts(serial, box, width);
+  std::uint64_t halos[2]{};
+  for (int levels : {0, 3}) {
+    mpi::DecompositionParams params;
+    params.partition.method = "HSFC";
+    params.halo_piece_levels = levels;
+    mpi::Decomposition<2> d(MPI_COMM_WORLD, params);
+    auto p = all;
+    d.distribute(p);
+    d.balance(p, {});
+    d.make_ghosts(p, box, width);
+    INFO("2^" << levels << " boxes a rank");
+    CHECK(neighbour_mismatches(p, serial, width) == 0);
+    halos[levels > 0] = world().sum(d.counts().halo_points);
+  }
+  INFO("halos with one box a rank " << halos[0] << ", with eight " << halos[1]);
+  // measured: 399 against 1031 at 2 ranks, 704 against 955 at 3, 520 against 1010 at 4
+  if (world().size() > 1) CHECK(halos[1] < 0.8 * halos[0]);
 }
 
 namespace {

@@ -24,6 +24,7 @@
 #include <cstring>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <span>
 #include <tuple>
 #include <type_traits>
@@ -165,12 +166,19 @@ struct DecompositionParams {
   /// keepers of the new cells it asks about are decided within what it gathered (Gathered); later remaps start
   /// from the reach the last one needed.
   double owner_reach_in_h = 4.0;
+  /// A rank describes its particles to the others for their halos by 2^halo_piece_levels boxes, its particles
+  /// split that many times at the middle of their longest axis: a curved part (a piece of a disk's annulus) is
+  /// held by boxes that hug it, where one box round it holds much of the others' gas. Every rank receives
+  /// every rank's boxes at each halo build (4 D numbers a box). 0: one box a rank.
+  int halo_piece_levels = 3;
   void validate() const {
     partition.validate();
     require(rebalance_above >= 1.0, "the decomposition's rebalance threshold must be at least 1");
     require(repartition_every >= 1, "the decomposition must repartition at least every step count >= 1");
     require(remap_reach_in_h > 0.0, "the decomposition's remap reach must be positive");
     require(owner_reach_in_h > 0.0, "the decomposition's first reach of the remap by owners must be positive");
+    require(halo_piece_levels >= 0 && halo_piece_levels <= 10,
+            "the decomposition's halo pieces must be split 0 to 10 times");
   }
 };
 
@@ -237,6 +245,58 @@ bool may_meet(const Vec<D>& lo1, const Vec<D>& hi1, const Vec<D>& lo2, const Vec
     if (!box.periodic(k) && (hi1[k] < lo2[k] || hi2[k] < lo1[k])) return false;
   return true;
 }
+
+namespace detail {
+/// A set of particles split into pieces: 4 D numbers a piece (lo, hi of its particles, lo, hi of their reaches
+/// x -+ reach(a); a piece with none: lo = inf, hi = -inf), and the piece of each particle.
+struct Pieces {
+  std::vector<double> bounds;
+  std::vector<std::uint32_t> piece;
+};
+
+/// The particles x[0, n) split `levels` times at the middle of their bounds' longest axis, into 2^levels pieces
+/// (some empty where a piece's particles all sit at one point, or fewer particles than pieces are left), the
+/// same count on every rank. One pass over the particles a level.
+template <int D, class Reach>
+Pieces split_into_pieces(const std::vector<Vec<D>>& x, std::size_t n, Reach&& reach, int levels) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  constexpr std::size_t width = 4 * D;
+  Pieces out{std::vector<double>((std::size_t{1} << levels) * width), std::vector<std::uint32_t>(n)};
+  for (std::size_t i = 0; i < out.bounds.size(); i += width)
+    for (int k = 0; k < D; ++k)
+      out.bounds[i + k] = out.bounds[i + 2 * D + k] = inf, out.bounds[i + D + k] = out.bounds[i + 3 * D + k] = -inf;
+  std::vector<std::uint32_t> order(n);
+  std::iota(order.begin(), order.end(), 0u);
+  // the particles order[first, last) at depth `level`: piece `at`, or the pieces after it that its halves take
+  const auto split = [&](auto&& self, std::size_t first, std::size_t last, int level, std::size_t at) -> void {
+    double* b = &out.bounds[at * width];
+    for (std::size_t i = first; i < last; ++i) {
+      const auto a = order[i];
+      const double r = reach(a);
+      out.piece[a] = static_cast<std::uint32_t>(at);
+      for (int k = 0; k < D; ++k) {
+        b[k] = std::min(b[k], x[a][k]), b[D + k] = std::max(b[D + k], x[a][k]);
+        b[2 * D + k] = std::min(b[2 * D + k], x[a][k] - r), b[3 * D + k] = std::max(b[3 * D + k], x[a][k] + r);
+      }
+    }
+    int axis = 0;
+    for (int k = 1; k < D; ++k)
+      if (b[D + k] - b[k] > b[D + axis] - b[axis]) axis = k;
+    if (level == levels || last - first < 2 || !(b[D + axis] > b[axis])) return;
+    const double cut = 0.5 * (b[axis] + b[D + axis]);
+    const auto mid = std::partition(order.begin() + static_cast<std::ptrdiff_t>(first),
+                                    order.begin() + static_cast<std::ptrdiff_t>(last),
+                                    [&](std::uint32_t a) { return x[a][axis] < cut; }) -
+                     order.begin();
+    for (int k = 0; k < D; ++k)  // the two halves take this piece's place
+      b[k] = b[2 * D + k] = inf, b[D + k] = b[3 * D + k] = -inf;
+    self(self, first, static_cast<std::size_t>(mid), level + 1, at);
+    self(self, static_cast<std::size_t>(mid), last, level + 1, at + (std::size_t{1} << (levels - level - 1)));
+  };
+  split(split, 0, n, 0, 0);
+  return out;
+}
+}  // namespace detail
 
 /// Does a point at x, or one of its periodic images, lie within the box [lo, hi]?
 template <int D>
@@ -521,9 +581,9 @@ class Decomposition {
  private:
   using Lists = std::vector<std::vector<std::uint32_t>>;
 
-  /// Appends the halos; returns every rank's bounds it chose them by (4 D numbers a rank: lo, hi of its
-  /// particles, lo, hi of their reaches). h_max > 0: a particle reaches width h / h_max (h_max: every rank's
-  /// largest h); else every particle reaches `width`.
+  /// Appends the halos; returns every rank's bounds it chose them by (4 D numbers a box: lo, hi of its
+  /// particles, lo, hi of their reaches; 2^halo_piece_levels boxes a rank where h_max > 0, else one). h_max > 0:
+  /// a particle reaches width h / h_max (h_max: every rank's largest h); else every particle reaches `width`.
   template <bool E>
   std::vector<double> receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, double h_max);
 
@@ -618,37 +678,47 @@ template <bool E>
 std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width,
                                                     double h_max) {
   // A pair interacts within support max(h_a, h_b) (times the search margin), so particle a reaches
-  // R_a = width h_a / h_max: each rank's bounds, of its particles and of their reaches, go to every rank; a
-  // particle goes to a rank whose reach holds it or whose particles it reaches. Without h_max, R = width.
+  // R_a = width h_a / h_max: each rank's boxes, of its particles and of their reaches, go to every rank; a
+  // particle goes to a rank one of whose reaches holds it or one of whose boxes it reaches. Without h_max, R =
+  // width, and a rank is one box (Gathered: the local set then holds every particle within width of its bounds).
   const auto reach = [&](std::size_t a) { return h_max > 0.0 ? width * p.h[a] / h_max : width; };
-  constexpr double inf = std::numeric_limits<double>::infinity();
-  std::vector<double> mine(4 * D);  // lo, hi of the particles; lo, hi of their reaches (empty for none)
-  for (int k = 0; k < D; ++k) mine[k] = mine[2 * D + k] = inf, mine[D + k] = mine[3 * D + k] = -inf;
-  for (std::size_t a = 0; a < p.n_real; ++a)
-    for (int k = 0; k < D; ++k) {
-      const double x = p.x[a][k], r = reach(a);
-      mine[k] = std::min(mine[k], x), mine[D + k] = std::max(mine[D + k], x);
-      mine[2 * D + k] = std::min(mine[2 * D + k], x - r), mine[3 * D + k] = std::max(mine[3 * D + k], x + r);
-    }
+  const int levels = h_max > 0.0 ? params_.halo_piece_levels : 0;
+  const auto pieces = detail::split_into_pieces<D>(p.x, p.n_real, reach, levels);
+  const auto& mine = pieces.bounds;
   const auto all = comm_->all_gather(std::span<const double>(mine));
-  const int me = comm_->rank();
+  const std::size_t per_rank = mine.size();
+  constexpr std::size_t B = 4 * D;  // numbers a box
   using Map = Eigen::Map<const Vec<D>>;
-  const Vec<D> my_lo = Map(mine.data()), my_hi = Map(mine.data() + D);
-  const Vec<D> my_reach_lo = Map(mine.data() + 2 * D), my_reach_hi = Map(mine.data() + 3 * D);
+  const int me = comm_->rank();
   halo_send_.assign(static_cast<std::size_t>(ranks()), {});
+  const std::size_t K = per_rank / B;
+  std::vector<const double*> near;  // of each of this rank's pieces, rank q's boxes near it
+  std::vector<std::size_t> near_first(K + 1);
   for (int q = 0; q < ranks(); ++q) {
     if (q == me) continue;
-    const double* b = &all[4 * D * static_cast<std::size_t>(q)];
-    const Vec<D> lo = Eigen::Map<const Vec<D>>(b), hi = Eigen::Map<const Vec<D>>(b + D);
-    const Vec<D> reach_lo = Eigen::Map<const Vec<D>>(b + 2 * D), reach_hi = Eigen::Map<const Vec<D>>(b + 3 * D);
-    // the bounds first, so that a rank looks at its particles only for the ranks near it: O(P + k n), not O(P n)
-    if (!may_meet<D>(my_lo, my_hi, reach_lo, reach_hi, box) && !may_meet<D>(my_reach_lo, my_reach_hi, lo, hi, box))
-      continue;
+    // the boxes first, so that a rank looks at its particles only for the ranks and boxes near them: O(P K^2 + k
+    // n), not O(P n)
+    near.clear();
+    for (std::size_t l = 0; l < K; ++l) {
+      const double* m = &mine[l * B];
+      near_first[l] = near.size();
+      for (std::size_t i = per_rank * static_cast<std::size_t>(q); i < per_rank * static_cast<std::size_t>(q + 1);
+           i += B)
+        if (may_meet<D>(Map(m), Map(m + D), Map(&all[i + 2 * D]), Map(&all[i + 3 * D]), box) ||
+            may_meet<D>(Map(m + 2 * D), Map(m + 3 * D), Map(&all[i]), Map(&all[i + D]), box))
+          near.push_back(&all[i]);
+    }
+    near_first[K] = near.size();
+    if (near.empty()) continue;
     for (std::size_t a = 0; a < p.n_real; ++a) {
-      const double r = reach(a);
-      if (reaches<D>(p.x[a], reach_lo, reach_hi, box, width) ||
-          reaches<D>(p.x[a], lo - Vec<D>::Constant(r), hi + Vec<D>::Constant(r), box, width))
-        halo_send_[static_cast<std::size_t>(q)].push_back(std::uint32_t(a));
+      const Vec<D> r = Vec<D>::Constant(reach(a));
+      const auto l = pieces.piece[a];
+      for (std::size_t i = near_first[l]; i < near_first[l + 1]; ++i)
+        if (reaches<D>(p.x[a], Map(near[i] + 2 * D), Map(near[i] + 3 * D), box, width) ||
+            reaches<D>(p.x[a], Map(near[i]) - r, Map(near[i] + D) + r, box, width)) {
+          halo_send_[static_cast<std::size_t>(q)].push_back(std::uint32_t(a));
+          break;
+        }
     }
   }
   const auto fields = [&] {
