@@ -746,6 +746,31 @@ TEST_CASE("Checkpoint on many ranks, written in turns and together: the same num
 }
 
 namespace {
+/// Share `part` of `parts` of the archive check_checkpoint_on_ranks writes on P ranks (n rows in all), read
+/// field by field in the same order on every rank (a collective read needs it).
+void check_share(io::Archive& ar, std::size_t part, std::size_t parts, std::size_t P, std::size_t n) {
+  std::vector<std::uint64_t> id_read;
+  std::vector<Vec<2>> x_read;
+  std::vector<double> odd_read;
+  double updates_read = -1.0, time_read = -1.0;
+  ar.rows("id", id_read);
+  ar.rows("x", x_read);
+  ar.rows("odd", odd_read);  // 3 rows in all, on rank 1: some parts read none, and take part all the same
+  ar.total("updates", updates_read);
+  ar("time", time_read);
+  INFO("part " << part << " of " << parts << ", written by " << P << " ranks");
+  REQUIRE(id_read.size() == n * (part + 1) / parts - n * part / parts);
+  REQUIRE(x_read.size() == id_read.size());
+  for (std::size_t k = 0; k < id_read.size(); ++k) {
+    CHECK(id_read[k] == n * part / parts + k);
+    CHECK(x_read[k] == Vec<2>(double(id_read[k]), -0.5 * double(id_read[k])));
+  }
+  const std::size_t n_odd = P > 1 ? 3 : 0;
+  CHECK(odd_read == std::vector<double>(n_odd * (part + 1) / parts - n_odd * part / parts, 2.5));
+  CHECK(updates_read == (part == 0 ? double(P * (P + 1) / 2) : 0.0));
+  CHECK(time_read == 0.25);
+}
+
 void check_checkpoint_on_ranks(bool together) {
   const auto c = world();
   const auto P = static_cast<std::size_t>(c.size()), r = static_cast<std::size_t>(c.rank());
@@ -771,44 +796,12 @@ void check_checkpoint_on_ranks(bool together) {
   for (const std::size_t parts : {std::size_t(1), std::size_t(2), std::size_t(3), std::size_t(5)})
     for (std::size_t part = 0; part < parts; ++part) {
       auto ar = io::Archive::load(file, {part, parts});
-      std::vector<std::uint64_t> id_read;
-      std::vector<Vec<2>> x_read;
-      double updates_read = -1.0, time_read = -1.0;
-      ar.rows("id", id_read);
-      ar.rows("x", x_read);
-      ar.total("updates", updates_read);
-      ar("time", time_read);
-      INFO("part " << part << " of " << parts << ", written by " << P << " ranks");
-      REQUIRE(id_read.size() == n * (part + 1) / parts - n * part / parts);
-      REQUIRE(x_read.size() == id_read.size());
-      for (std::size_t k = 0; k < id_read.size(); ++k) {
-        CHECK(id_read[k] == n * part / parts + k);
-        CHECK(x_read[k] == Vec<2>(double(id_read[k]), -0.5 * double(id_read[k])));
-      }
-      CHECK(updates_read == (part == 0 ? double(P * (P + 1) / 2) : 0.0));
-      CHECK(time_read == 0.25);
-      std::vector<double> odd_read;
-      ar.rows("odd", odd_read);
-      const std::size_t n_odd = P > 1 ? 3 : 0;
-      CHECK(odd_read == std::vector<double>(n_odd * (part + 1) / parts - n_odd * part / parts, 2.5));
+      check_share(ar, part, parts, P, n);
     }
   if (mpi::parallel_hdf5) {  // read together: every rank its share, each field in one collective call
     const mpi::FileTurns turns(c);
     auto ar = io::Archive::load(file, {r, P}, turns.reading());
-    std::vector<std::uint64_t> id_read;
-    std::vector<double> odd_read;
-    double updates_read = -1.0, time_read = -1.0;
-    ar.rows("id", id_read);
-    ar.rows("odd", odd_read);  // 3 rows in all: on 4 ranks rank 0 reads none, and takes part all the same
-    ar.total("updates", updates_read);
-    ar("time", time_read);
-    INFO("read together, part " << r << " of " << P);
-    REQUIRE(id_read.size() == n * (r + 1) / P - n * r / P);
-    for (std::size_t k = 0; k < id_read.size(); ++k) CHECK(id_read[k] == n * r / P + k);
-    const std::size_t n_odd = P > 1 ? 3 : 0;
-    CHECK(odd_read == std::vector<double>(n_odd * (r + 1) / P - n_odd * r / P, 2.5));
-    CHECK(updates_read == (r == 0 ? double(P * (P + 1) / 2) : 0.0));
-    CHECK(time_read == 0.25);
+    check_share(ar, r, P, P, n);
   }
   c.barrier();
   if (r == 0) std::filesystem::remove(file);
