@@ -11,10 +11,12 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cstdint>
 #include <cstdlib>
 #include <span>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 #ifdef RSPH_WITH_MPI
@@ -159,14 +161,29 @@ std::uint64_t count_over_ranks(const Sim& sim, std::uint64_t n) {
     return n;
 }
 
-/// The particles of every rank on every rank, or the set itself in one process: for a measure that needs the
-/// whole field at once.
+/// The particles of every rank on rank 0 and none on the others, or the set itself in one process: for a measure
+/// that needs the whole field at once, made on rank 0 (measured_on_root).
 template <class Sim>
-decltype(auto) particles_everywhere(const Sim& sim) {
+decltype(auto) particles_on_root(const Sim& sim) {
   if constexpr (Sim::distributed)
-    return sim.domain().gather_everywhere(sim.particles());
+    return sim.domain().gather_on_root(sim.particles());
   else
     return (sim.particles());
+}
+
+/// f(whole), an array of figures, made on rank 0 from particles_on_root's set `whole` and sent to every rank (the
+/// others hold no particles there and do not call f).
+template <class Sim, class P, class F>
+auto measured_on_root(const Sim& sim, const P& whole, F&& f) {
+  static_assert(std::tuple_size_v<decltype(f(whole))> > 0, "a measure on rank 0 returns an std::array of doubles");
+  if constexpr (Sim::distributed) {
+    decltype(f(whole)) figures{};
+    if (sim.domain().comm().rank() == 0) figures = f(whole);
+    sim.domain().broadcast(std::span<double>(figures));
+    return figures;
+  } else {
+    return f(whole);
+  }
 }
 
 }  // namespace rsph::examples

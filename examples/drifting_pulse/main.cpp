@@ -98,13 +98,13 @@ void run_case(scenes::DriftingPulseParams s, const std::vector<int>& counts, con
           [&](const auto& sm, int k) {
             if (k < 0) return;
             const int count = counts[static_cast<std::size_t>(k)];
-            decltype(auto) p = ex::particles_everywhere(sm);  // the whole profile, on every rank
+            decltype(auto) p = ex::particles_on_root(sm);  // the whole profile on rank 0, none on the others
             const auto x = scenes::comoving_positions(p, sm.time(), s.v_drift);
             io::CsvWriter csv(case_dir / fmt::format("profile_{}.csv", count), {"x", "rho", "m"});
             for (std::size_t a = 0; a < p.n_real; ++a) csv.row({x[a] / s.spacing(), p.rho[a], p.m[a]});
             csv.close();
             snapshots.write(sm);
-            const auto [axes, w] = scenes::pulse_widths(p, sm.time(), s);
+            const auto [axes, w] = scenes::measure_widths(sm, p, s);
             run.results.back().widths.push_back(w);
             std::vector<double> row{s.shift, static_cast<double>(count), w};
             if constexpr (D > 1) {

@@ -6,6 +6,7 @@
 #include "common/run_helpers.hpp"
 #include "rsph/rsph.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <string>
@@ -101,10 +102,12 @@ double pulse_width_mass(const P& p, double t, const DriftingPulseParams& s, int 
   return std::sqrt(std::max(var / M, 0.0)) / s.spacing();
 }
 
-/// The same of a simulation, its particles on every rank gathered first.
+/// The same of a simulation, its particles gathered on rank 0 and the width sent to every rank.
 template <class Sim>
 double pulse_width_mass(const Sim& sim, const DriftingPulseParams& s, int axis = 0) {
-  return pulse_width_mass(examples::particles_everywhere(sim), sim.time(), s, axis);
+  decltype(auto) whole = examples::particles_on_root(sim);
+  return examples::measured_on_root(
+      sim, whole, [&](const auto& all) { return std::array{pulse_width_mass(all, sim.time(), s, axis)}; })[0];
 }
 
 /// The widths along every axis, and their root mean square (the 1D width in 1D), of a whole set at time t.
@@ -119,10 +122,23 @@ std::pair<std::vector<double>, double> pulse_widths(const P& p, double t, const 
   return {w, std::sqrt(sum2 / P::dim)};
 }
 
-/// The same of a simulation, its particles on every rank gathered first.
+/// The same of a simulation from its whole set `whole` on rank 0 (examples::particles_on_root), on every rank.
+template <class Sim, class P>
+std::pair<std::vector<double>, double> measure_widths(const Sim& sim, const P& whole, const DriftingPulseParams& s) {
+  constexpr int D = Sim::dim;
+  const auto f = examples::measured_on_root(sim, whole, [&](const auto& all) {
+    const auto [axes, rms] = pulse_widths(all, sim.time(), s);
+    std::array<double, D + 1> out{};
+    std::copy(axes.begin(), axes.end(), out.begin());
+    out[D] = rms;
+    return out;
+  });
+  return {std::vector<double>(f.begin(), f.begin() + D), f[D]};
+}
+/// The same, its particles gathered first.
 template <class Sim>
 std::pair<std::vector<double>, double> pulse_widths(const Sim& sim, const DriftingPulseParams& s) {
-  return pulse_widths(examples::particles_everywhere(sim), sim.time(), s);
+  return measure_widths(sim, examples::particles_on_root(sim), s);
 }
 
 }  // namespace rsph::scenes

@@ -187,6 +187,18 @@ analysis::InterfaceFolds interface_folds(const P& p, const KelvinHelmholtzParams
   return analysis::interface_folds<kernel::CubicSpline>(p, s.box(), std::sqrt(s.chi), 0.25 / s.cells);
 }
 
+/// The same of a simulation, made on its particles gathered on rank 0 and sent to every rank.
+template <class Sim>
+analysis::InterfaceFolds measure_folds(const Sim& sim, const KelvinHelmholtzParams& s) {
+  decltype(auto) whole = examples::particles_on_root(sim);
+  const auto f = examples::measured_on_root(sim, whole, [&](const auto& all) {
+    const auto folds = interface_folds(all, s);
+    return std::array{static_cast<double>(folds.columns), static_cast<double>(folds.rows), folds.overturned_fraction,
+                      folds.mean_crossings};
+  });
+  return {static_cast<std::size_t>(f[0]), static_cast<std::size_t>(f[1]), f[2], f[3]};
+}
+
 /// How a method treats the contact between the phases, the failure of plain SPH at chi = 10 that Agertz et
 /// al. (2007, the gap between the phases) and Price (2008, the pressure blip of a temperature jump without
 /// conductivity) describe: the share of the box's area at densities between the phases' (1.5 < rho <
@@ -280,7 +292,7 @@ KhRun run_kh(Sim& sim, const KelvinHelmholtzParams& s, OnStep&& on_step, OnEnd&&
   on_end(sim);
   r.amplitude_final = r.amplitude.back();
   if constexpr (Sim::dim == 2)
-    if (s.chi > 1.0) r.folds = interface_folds(examples::particles_everywhere(sim), s);
+    if (s.chi > 1.0) r.folds = measure_folds(sim, s);
   r.contact = measure_contact(sim, s);
   r.growth_rate = fitted_growth_rate(r.t, r.amplitude, 0.1 * s.tau_KH(), 0.5 * s.tau_KH());
   r.energy_error = std::abs(sim.totals().total_energy() - E0) / E0;

@@ -10,6 +10,8 @@
 
 #include <fmt/format.h>
 
+#include <array>
+
 using namespace rsph;
 namespace ex = rsph::examples;
 
@@ -51,7 +53,7 @@ int run(const Options& opt, Sim sim) {
   progress.finish();
   log.close();
 
-  decltype(auto) p = ex::particles_everywhere(sim);  // the whole tube, on every rank
+  decltype(auto) p = ex::particles_on_root(sim);  // the whole tube, on rank 0 (none on the others)
   io::CsvWriter parts(dir / "particles.csv", {"x", "y", "rho", "v", "P", "u"});
   for (std::size_t a = 0; a < p.n_real; ++a)
     parts.row({p.x[a][0], D > 1 ? p.x[a][D - 1] : 0.0, p.rho[a], p.v[a][0], p.P[a], p.u[a]});
@@ -64,14 +66,19 @@ int run(const Options& opt, Sim sim) {
   }
   ex_csv.close();
 
-  const auto err = analysis::shock_tube_errors(p, exact, sim.time(), 0.5);
+  const auto e = ex::measured_on_root(sim, p, [&](const auto& all) {
+    const auto tube = analysis::shock_tube_errors(all, exact, sim.time(), 0.5);
+    return std::array{tube.L1_rho, tube.L1_v, tube.L1_P};
+  });
+  const analysis::ShockTubeErrors err{e[0], e[1], e[2]};
+  const std::uint64_t particles = ex::count_over_ranks(sim, sim.particles().n_real);
   const auto end = sim.totals();
   io::Json summary;
   summary.set("test", "sod")
       .set("method", opt.method)
       .set("dim", D)
       .set("kernel", opt.kernel)
-      .set("particles", static_cast<std::uint64_t>(p.n_real));
+      .set("particles", particles);
   summary.set("time", sim.time()).set("L1_rho", err.L1_rho).set("L1_v", err.L1_v).set("L1_P", err.L1_P);
   summary.set("energy_error", ex::relative_change(end.total_energy(), start.total_energy()));
   summary.set("mass_error", ex::relative_change(end.mass, start.mass));
@@ -86,7 +93,7 @@ int run(const Options& opt, Sim sim) {
   fmt::print(
       "rsph-sod {}D: {} particles, {} steps, {:.2f} s; L1(rho) = {:.4g}, L1(v) = {:.4g}, L1(P) = {:.4g}; "
       "energy error {:.2e}\n  output: {}\n",
-      D, p.n_real, sim.steps(), cost.wall_seconds, err.L1_rho, err.L1_v, err.L1_P,
+      D, particles, sim.steps(), cost.wall_seconds, err.L1_rho, err.L1_v, err.L1_P,
       ex::relative_change(end.total_energy(), start.total_energy()), dir.string());
   return 0;
 }

@@ -7,6 +7,7 @@
 #include "rsph/rsph.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <string>
@@ -93,11 +94,37 @@ double shock_position(const P& p, double threshold, double bin) {
   return 0.0;
 }
 
-/// The measures of the final state: errors against the exact solution, shock position, penetration.
+/// The figures of the whole final set at time t: L1 errors of rho, v and P against the exact solution, the shock
+/// position, and the fraction of particles beyond the contact + 2h that carry left-state gas.
+template <class P>
+std::array<double, 5> final_figures(const P& p, const StrongShockParams& s, const analysis::ExactRiemann& exact,
+                                    double t) {
+  const auto errors = analysis::shock_tube_errors(p, exact, t, 0.5);
+  double h_max = 0.0;
+  for (std::size_t a = 0; a < p.n_real; ++a) h_max = std::max(h_max, p.h[a]);
+  const double shock = shock_position(p, 0.5 * (s.right.rho + exact.rho_star_right()), h_max);
+  // left-state gas: log u nearer to the exact left star value than to the right one
+  const eos::IdealGas gas{s.gamma};
+  const double uL = std::log(gas.internal_energy(exact.rho_star_left(), exact.p_star()));
+  const double uR = std::log(gas.internal_energy(exact.rho_star_right(), exact.p_star()));
+  const double contact = 0.5 + exact.v_star() * t;
+  std::size_t beyond = 0, left_state = 0;
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    if (p.x[a][0] <= contact + 2.0 * p.h[a]) continue;
+    ++beyond;
+    const double lu = std::log(std::max(p.u[a], 1e-300));
+    if (std::abs(lu - uL) < std::abs(lu - uR)) ++left_state;
+  }
+  const double penetration = beyond ? static_cast<double>(left_state) / static_cast<double>(beyond) : 0.0;
+  return {errors.L1_rho, errors.L1_v, errors.L1_P, shock, penetration};
+}
+
+/// The measures of the final state, made on the whole tube gathered on rank 0 and sent to every rank; the
+/// particles' profile (r.x, r.rho, ...) is rank 0's alone.
 template <class Sim>
 void measure(const Sim& sim, const StrongShockParams& s, ShockRun& r) {
   const analysis::ExactRiemann exact(s.left, s.right, s.gamma);
-  decltype(auto) p = examples::particles_everywhere(sim);  // the whole tube, on every rank
+  decltype(auto) p = examples::particles_on_root(sim);  // the whole tube on rank 0, none on the others
   for (std::size_t a = 0; a < p.n_real; ++a) {
     r.x.push_back(p.x[a][0]);
     r.y.push_back(p.x[a][1]);
@@ -108,24 +135,12 @@ void measure(const Sim& sim, const StrongShockParams& s, ShockRun& r) {
     r.h.push_back(p.h[a]);
   }
   const double t = sim.time();
-  r.errors = analysis::shock_tube_errors(p, exact, t, 0.5);
   r.shock_position_exact = 0.5 + exact.right_shock_speed() * t;
   r.contact_exact = 0.5 + exact.v_star() * t;
-  double h_max = 0.0;
-  for (double h : r.h) h_max = std::max(h_max, h);
-  r.shock_position = shock_position(p, 0.5 * (s.right.rho + exact.rho_star_right()), h_max);
-  // left-state gas: log u nearer to the exact left star value than to the right one
-  const eos::IdealGas gas{s.gamma};
-  const double uL = std::log(gas.internal_energy(exact.rho_star_left(), exact.p_star()));
-  const double uR = std::log(gas.internal_energy(exact.rho_star_right(), exact.p_star()));
-  std::size_t beyond = 0, left_state = 0;
-  for (std::size_t a = 0; a < p.n_real; ++a) {
-    if (p.x[a][0] <= r.contact_exact + 2.0 * p.h[a]) continue;
-    ++beyond;
-    const double lu = std::log(std::max(p.u[a], 1e-300));
-    if (std::abs(lu - uL) < std::abs(lu - uR)) ++left_state;
-  }
-  r.penetration = beyond ? static_cast<double>(left_state) / static_cast<double>(beyond) : 0.0;
+  const auto f = examples::measured_on_root(sim, p, [&](const auto& all) { return final_figures(all, s, exact, t); });
+  r.errors = {f[0], f[1], f[2]};
+  r.shock_position = f[3];
+  r.penetration = f[4];
 }
 
 }  // namespace detail

@@ -218,13 +218,23 @@ TEST_CASE(
   CHECK(got == only_others);
 }
 
+namespace {
+
+/// n particles at random in the unit square, whose fields tell their number i: m = 1 + i, v = (i, -i), u = 2 i.
+ParticleSet<2, true> numbered_set(int n, unsigned seed) {
+  ParticleSet<2, true> p;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < n; ++i) p.add(1.0 + i, Vec<2>(u(rng), u(rng)), Vec<2>(i, -i), 0.01, 2.0 * i);
+  return p;
+}
+
+}  // namespace
+
 TEST_CASE("Decomposition: shared out, partitioned and migrated, every particle lives on one rank with its fields",
           "[mpi]") {
   mpi::Decomposition<2> d;
-  ParticleSet<2, true> p;
-  std::mt19937 rng(3);
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  for (int i = 0; i < 3000; ++i) p.add(1.0 + i, Vec<2>(u(rng), u(rng)), Vec<2>(i, -i), 0.01, 2.0 * i);
+  ParticleSet<2, true> p = numbered_set(3000, 3);
   const auto before = gather_by_id(p);
   d.distribute(p);
   d.balance(p, {});
@@ -241,6 +251,36 @@ TEST_CASE("Decomposition: shared out, partitioned and migrated, every particle l
     CHECK(double(c.all_reduce(p.n_real, MPI_MAX)) < 1.1 * 3000.0 / c.size());
     CHECK(d.counts().partitions == 1u);
   }
+}
+
+TEST_CASE("Decomposition: the whole set gathered on rank 0 alone, in rank order, and its figures sent to every rank",
+          "[mpi]") {
+  mpi::Decomposition<2> d;
+  ParticleSet<2, true> p = numbered_set(1000, 5);
+  d.distribute(p);
+  d.balance(p, {});
+  const auto c = world();
+  const auto all = d.gather_on_root(p);
+  std::array<double, 3> figures{};
+  if (c.rank() == 0) {
+    REQUIRE(all.n_real == 1000u);
+    CHECK(all.x.size() == 1000u);
+    std::set<std::uint64_t> ids(all.id.begin(), all.id.end());
+    CHECK(ids.size() == 1000u);
+    CHECK(*ids.rbegin() == 999u);
+    for (std::size_t a = 0; a < all.n_real; ++a) {  // every field travelled with its identity
+      CHECK(all.m[a] == 1.0 + double(all.id[a]));
+      CHECK(all.v[a] == Vec<2>(double(all.id[a]), -double(all.id[a])));
+      CHECK(all.u[a] == 2.0 * double(all.id[a]));
+    }
+    for (std::size_t a = 0; a < p.n_real; ++a) CHECK(all.id[a] == p.id[a]);  // rank 0's own first
+    figures = {1.5, -2.0, double(all.n_real)};
+  } else {
+    CHECK(all.n_real == 0u);
+    CHECK(all.x.empty());
+  }
+  d.broadcast(figures);
+  CHECK(figures == std::array{1.5, -2.0, 1000.0});
 }
 
 namespace {

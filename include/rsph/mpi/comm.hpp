@@ -203,6 +203,13 @@ class Comm {
     return text;
   }
 
+  /// Rank `root`'s values, on every rank.
+  void broadcast(std::span<double> values, int root = 0) const {
+    const Timer t(seconds_);
+    ++collectives_;
+    check(MPI_Bcast(values.data(), static_cast<int>(values.size()), MPI_DOUBLE, root, c_), "MPI_Bcast");
+  }
+
   void barrier() const {
     const Timer t(seconds_);
     check(MPI_Barrier(c_), "MPI_Barrier");

@@ -545,19 +545,18 @@ class Decomposition {
     if (ranks() > 1) comm_->sum_in_place(values);
   }
 
-  /// Every rank's real particles on every rank, in rank order (fields and identities; rates left out): for a
-  /// measure that needs the whole set at once (an interface traced through the field), made once at the end of a
-  /// run.
+  /// Every rank's real particles on rank 0, in rank order (fields and identities; rates left out), and none on
+  /// the others: for a measure that needs the whole set at once (an interface traced through the field, a profile
+  /// written particle by particle), made by rank 0 and its figures sent to the others (broadcast).
   template <bool E>
-  ParticleSet<D, E> gather_everywhere(const ParticleSet<D, E>& p) const {
+  ParticleSet<D, E> gather_on_root(const ParticleSet<D, E>& p) const {
     if (ranks() == 1) {
       auto all = p;
       all.clear_ghosts();
       return all;
     }
     Lists to(static_cast<std::size_t>(ranks()));
-    for (auto& list : to)
-      for (std::size_t a = 0; a < p.n_real; ++a) list.push_back(static_cast<std::uint32_t>(a));
+    for (std::size_t a = 0; a < p.n_real; ++a) to[0].push_back(static_cast<std::uint32_t>(a));
     ParticleSet<D, E> all;
     const auto fields = [](auto& q) {
       if constexpr (E)
@@ -571,6 +570,11 @@ class Decomposition {
     if constexpr (E) all.du_dt.assign(all.n_real, 0.0);
     all.next_id = p.next_id;
     return all;
+  }
+
+  /// Rank 0's values on every rank (the figures of a measure made there).
+  void broadcast(std::span<double> values) const {
+    if (ranks() > 1) comm_->broadcast(values);
   }
 
   /// Mass, momentum, angular momentum and energies over every rank's real particles, the same bits at any
