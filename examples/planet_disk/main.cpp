@@ -121,6 +121,10 @@ std::optional<Options> parse_options(int argc, char** argv) {
   flag("keep-zone-members", s.keep_zone_members,
        "the zones keep the members chosen at the start through every remap, instead of deciding membership by "
        "radius after each (the paper's)");
+  flag("damping-width", s.damping_width,
+       "width of wave-damping zones just inside the fixed ones, where the velocity relaxes toward the circular "
+       "orbit (de Val-Borro et al. 2006; 0: none, the paper's set-up)");
+  flag("damping-tau", s.damping_tau, "the damping zones' time scale, in orbital periods at their edges");
   flag("courant", s.courant, "time-step Courant factor");
   flag("force", s.force, "time-step force factor");
   flag("max-bin", s.max_bin,
@@ -199,6 +203,8 @@ io::Json disk_summary(const Options& opt, const scenes::DiskRun& r, const FinalF
   summary.set("max_bin", s.rsph() ? s.max_bin : 0);
   summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
   summary.set("lattice", s.dim == 3 ? (s.rsph() ? "cubic" : "columns") : s.lattice);
+  summary.set("damping_width", s.damping_width);
+  if (s.damping_width > 0.0) summary.set("damping_tau", s.damping_tau);
   if (s.dim == 3) summary.set("surface_in_H", s.surface);
   summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
   summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);

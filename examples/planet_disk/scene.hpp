@@ -8,6 +8,7 @@
 #include "common/disk_sites.hpp"
 #include "common/runner.hpp"
 #include "planet_disk/scene3d.hpp"
+#include "rsph/paper/damping_zones.hpp"
 #include "rsph/paper/disk.hpp"
 #include "rsph/paper/keplerian_zones.hpp"
 #include "rsph/paper/star_planet.hpp"
@@ -37,6 +38,9 @@ struct PlanetDiskParams {
   /// Whether the zones keep the members chosen at the start through every remap (KeplerianZones::members_kept)
   /// instead of deciding membership by radius after each (the paper's zones)
   bool keep_zone_members = false;
+  /// Width of the wave-damping zones just inside the fixed ones (paper::DampingZones; 0: none, the paper's
+  /// set-up) and their time scale in orbital periods at the zones' edges
+  double damping_width = 0.0, damping_tau = 0.1;
   double sigma0 = 0.002 / std::numbers::pi;  ///< eq. (19)'s value 6.366e-4 (de Val-Borro's 0.002 / pi), M_* / a^2
   double aspect = 0.05;                      ///< c_s / v_K
   double gamma = 1.4;                        ///< polytropic exponent (eq. 21)
@@ -73,6 +77,9 @@ struct PlanetDiskParams {
     require(orbits > 0.0, "planet disk: the number of orbits must be positive");
     require(r_in > 0.0 && r_out > r_in + 2.0 * zone_width && zone_width > 0.0,
             "planet disk: need 0 < r_in and r_in + 2 zone_width < r_out (an empty disk otherwise)");
+    require(damping_width >= 0.0 && r_in + 2.0 * zone_width + 2.0 * damping_width < r_out,
+            "planet disk: --damping-width must not be negative, and the damping zones must leave free gas between");
+    require(damping_tau > 0.0, "planet disk: --damping-tau must be positive");
     require(r_in < 1.0 && r_out > 1.0, "planet disk: the planet's orbit (r = 1) must lie inside the disk");
     require(sigma0 > 0.0 && aspect > 0.0 && aspect < 0.5, "planet disk: need Sigma_0 > 0 and 0 < c_s/v_K < 0.5");
     require(gamma > 1.0, "planet disk: gamma must exceed 1");
@@ -123,6 +130,7 @@ struct PlanetDiskParams {
     return std::sqrt(1.0 - aspect * aspect / (eos == "polytropic" ? gamma : 1.0));
   }
   paper::KeplerianZones zones() const { return {1.0, r_in + zone(), r_out - zone(), v_factor(), keep_zone_members}; }
+  paper::DampingZones damping() const { return {zones(), damping_width, damping_width, damping_tau}; }
   Box<2> box() const {
     Box<2> b;
     b.lo = Vec<2>(-r_out - 1.0, -r_out - 1.0);
@@ -323,10 +331,10 @@ using DiskRegularizer = regularize::LatticeRegularizer<Lattice, schedule::Adapti
 template <class Lattice, class EOS, class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline,
           class... Extra>
 using RsphDisk = Simulation<2, Kernel, EOS, DiskRegularizer<Lattice, Order, Kernel>, paper::StarAndPlanet,
-                            paper::KeplerianZones, Extra...>;
+                            paper::KeplerianZones, paper::DampingZones, Extra...>;
 template <class EOS, class Kernel = kernel::CubicSpline, class... Extra>
 using SphDisk = Simulation<2, Kernel, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity,
-                           paper::StarAndPlanet, paper::KeplerianZones, Extra...>;
+                           paper::StarAndPlanet, paper::KeplerianZones, paper::DampingZones, Extra...>;
 
 inline TimeStepParams disk_time_steps(const PlanetDiskParams& s) {
   TimeStepParams ts;
@@ -356,7 +364,7 @@ RsphDisk<Lattice, EOS, Order, Kernel, Extra...> make_rsph_disk(const PlanetDiskP
       {.remap = remap, .region = disk_region<Lattice>(s), .order = order});
   return RsphDisk<Lattice, EOS, Order, Kernel, Extra...>(disk_particles_on<Kernel>(s, lat), s.box(), std::move(eos),
                                                          std::move(reg), disk_time_steps(s), s.star_planet(), s.zones(),
-                                                         std::move(extra)...);
+                                                         s.damping(), std::move(extra)...);
 }
 
 template <class Kernel = kernel::CubicSpline, class Lattice, class EOS, class... Extra>
@@ -364,7 +372,7 @@ SphDisk<EOS, Kernel, Extra...> make_sph_disk(const PlanetDiskParams& s, const La
   return SphDisk<EOS, Kernel, Extra...>(disk_particles_on<Kernel>(s, lat), s.box(), std::move(eos), {},
                                         disk_time_steps(s), physics::GradH<2>{s.h_over_dx},
                                         physics::ArtificialViscosity{s.alpha, s.beta}, s.star_planet(), s.zones(),
-                                        std::move(extra)...);
+                                        s.damping(), std::move(extra)...);
 }
 
 /// The 3D disk's methods: RSPH on the cubic lattice inside the flared disk, and equal-mass grad-h SPH.
@@ -375,10 +383,10 @@ using DiskRegularizer3 =
                                    region::FlaredDisk, Order>;
 template <class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline, class... Extra>
 using RsphDisk3 = Simulation<3, Kernel, Disk3EOS, DiskRegularizer3<Order, Kernel>, paper::StarAndPlanet,
-                             paper::KeplerianZones, Extra...>;
+                             paper::KeplerianZones, paper::DampingZones, Extra...>;
 template <class Kernel = kernel::CubicSpline, class... Extra>
 using SphDisk3 = Simulation<3, Kernel, Disk3EOS, regularize::None, physics::GradH<3>, physics::ArtificialViscosity,
-                            paper::StarAndPlanet, paper::KeplerianZones, Extra...>;
+                            paper::StarAndPlanet, paper::KeplerianZones, paper::DampingZones, Extra...>;
 
 /// RSPH in 3D: Appendix A's schedule with the bounds of the paper's h/Delta (0.9 and 3.0 on the lattice, which
 /// give its N_min = 4.5 and N_max = 107 in 2D), edge cells closed by the flared disk's cylinders and cones.
@@ -395,7 +403,8 @@ RsphDisk3<Order, Kernel, Extra...> make_rsph_disk_3d(const PlanetDiskParams& s, 
   auto p = flared_disk_lattice(box, dx, s.h(), s.r_in, s.r_out, slope, s.vertical(), s.sigma0, s.zones());
   require(p.n_real > 0, "planet disk: the flared disk holds no lattice site");
   return RsphDisk3<Order, Kernel, Extra...>(std::move(p), box, Disk3EOS(DiskSoundSpeed{s.aspect, 1.0}), std::move(reg),
-                                            disk_time_steps(s), s.star_planet(), s.zones(), std::move(extra)...);
+                                            disk_time_steps(s), s.star_planet(), s.zones(), s.damping(),
+                                            std::move(extra)...);
 }
 
 template <class Kernel = kernel::CubicSpline, class... Extra>
@@ -408,7 +417,7 @@ SphDisk3<Kernel, Extra...> make_sph_disk_3d(const PlanetDiskParams& s, Extra... 
   return SphDisk3<Kernel, Extra...>(std::move(p), disk_box_3d(s.r_out, dx), Disk3EOS(DiskSoundSpeed{s.aspect, 1.0}), {},
                                     disk_time_steps(s), physics::GradH<3>{s.h_over_dx},
                                     physics::ArtificialViscosity{s.alpha, s.beta}, s.star_planet(), s.zones(),
-                                    std::move(extra)...);
+                                    s.damping(), std::move(extra)...);
 }
 
 namespace detail {

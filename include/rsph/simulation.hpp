@@ -167,6 +167,7 @@ class Simulation {
     compute_rates();
     t0 = clock::now();
     integrate::closing_kick<corrected>(p_, dt, drho_dt_, leap_);
+    boundary::damp_velocities<D>(terms_, p_, dt);
     times_.integrate += seconds_since(t0);
     count_step(dt, p_.n_real);
     finish_step();
@@ -445,6 +446,9 @@ class Simulation {
       times_.integrate += seconds_since(t0);
       count_step(plan.delta, sync ? p_.n_real : blocks_.active().size());
     }
+    t0 = clock::now();
+    boundary::damp_velocities<D>(terms_, p_, plan.block);  // all synchronised now
+    times_.integrate += seconds_since(t0);
     finish_step();
     return plan.block;
   }

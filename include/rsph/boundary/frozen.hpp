@@ -43,6 +43,22 @@ void prescribe_frozen(const std::tuple<Terms...>& terms, ParticleSet<D, E>& p, d
   std::apply([&](const auto&... term) { (apply_motion(term), ...); }, terms);
 }
 
+/// Relaxes the velocities of the integrated particles over a step (or block) of dt that has just ended, as each
+/// VelocityDamping term says (the wave-damping zones).
+template <int D, bool E, class... Terms>
+void damp_velocities(const std::tuple<Terms...>& terms, ParticleSet<D, E>& p, double dt) {
+  auto damp = [&](const auto& t) {
+    if constexpr (VelocityDamping<std::decay_t<decltype(t)>, D>) {
+      if (!t.active()) return;
+      const std::size_t n = p.n_real;
+#pragma omp parallel for schedule(static) if (n >= kParallelMin)
+      for (std::size_t a = 0; a < n; ++a)
+        if (!p.frozen[a]) t.damp(p.x[a], p.v[a], dt);
+    }
+  };
+  std::apply([&](const auto&... term) { (damp(term), ...); }, terms);
+}
+
 /// Whether a boundary zone keeps its members through a regularization (`members_kept`): they are left out of
 /// the remap and keep their identity, and the new particles are not made members, however near they land.
 /// Otherwise (the paper's zones) membership is decided anew by position after every regularization.

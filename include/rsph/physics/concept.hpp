@@ -63,6 +63,15 @@ concept BoundaryZone = requires(const T& t, const Vec<D>& x, Vec<D>& x_mut, Vec<
   t.advance(x_mut, v, dt);
 };
 
+/// A region where the velocity of the integrated gas relaxes toward a reference field (the wave-damping zones
+/// at a disk's edges of de Val-Borro et al. 2006): damp(x, v, dt) relaxes v of a particle at x over a step dt;
+/// active() says whether any region damps at all.
+template <class T, int D>
+concept VelocityDamping = requires(const T& t, const Vec<D>& x, Vec<D>& v, double dt) {
+  t.damp(x, v, dt);
+  { t.active() } -> std::same_as<bool>;
+};
+
 /// Pair gradients corrected so that a uniform state is an exact equilibrium where h varies (level faces of
 /// a multi-level lattice), with the density from the continuity equation (physics/consistent_gradient.hpp).
 template <class T>
@@ -92,8 +101,9 @@ concept DomainDecomposition = requires(T& t, const T& c, ParticleSet<D, false>& 
 };
 
 template <class T, int D>
-concept Term = PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> ||
-    PrescribedMotion<T, D> || BoundaryZone<T, D> || GradientCorrection<T> || DomainDecomposition<T, D>;
+concept Term =
+    PairTerm<T, D> || StressTerm<T, D> || BodyForce<T, D> || SmoothingLengthSolver<T> || PrescribedMotion<T, D> ||
+    BoundaryZone<T, D> || VelocityDamping<T, D> || GradientCorrection<T> || DomainDecomposition<T, D>;
 
 /// Whether term T, if it names a dimension (`static constexpr int dim`), was made for dimension D.
 template <class T, int D>
@@ -121,7 +131,9 @@ constexpr bool check_term() {
                 "`solves_smoothing_length` with `rho_of_h` and `h_of_rho` (adaptive h), or "
                 "`void prescribe(size_t i, Vec<D>& x, Vec<D>& v, double t) const` (prescribed motion), or "
                 "`bool contains(const Vec<D>&) const` with `void advance(Vec<D>& x, Vec<D>& v, double dt) const` "
-                "(boundary zone), or `corrects_gradient` with `tolerance`, `max_iterations` and `every_step` "
+                "(boundary zone), or `void damp(const Vec<D>& x, Vec<D>& v, double dt) const` with `bool active() "
+                "const` (damping zone), or "
+                "`corrects_gradient` with `tolerance`, `max_iterations` and `every_step` "
                 "(consistent pair gradients), or `decomposes_domain` with `distribute`, `balance`, `make_ghosts`, "
                 "`refresh_halos` and the reductions `ranks`, `min`, `max`, `any`, `all` (many ranks)");
   return true;
