@@ -128,16 +128,10 @@ void sum_over_ranks(const Sim& sim, Span&& values) {
   if constexpr (Sim::distributed) sim.domain().sum_in_place(std::span<double>(values));
 }
 
-/// Element-wise least (`least`) or largest values over the ranks when `sim` is decomposed (a few values: every
-/// rank's are gathered).
+/// Element-wise least (`least`) or largest values over the ranks when `sim` is decomposed (one reduction).
 template <class Sim>
 void extreme_over_ranks(const Sim& sim, std::vector<double>& values, bool least) {
-  if constexpr (Sim::distributed) {
-    const auto all = sim.domain().gather_all(values);
-    for (std::size_t k = 0; k < values.size(); ++k)
-      for (std::size_t at = k; at < all.size(); at += values.size())
-        values[k] = least ? std::min(values[k], all[at]) : std::max(values[k], all[at]);
-  }
+  if constexpr (Sim::distributed) sim.domain().extreme_in_place(std::span<double>(values), least);
 }
 
 /// Sigma(points) = sum_b m_b W(|x - x_b|, h_b) over the whole gas (analysis::interpolate_density, an open box),

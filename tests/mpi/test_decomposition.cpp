@@ -253,7 +253,7 @@ TEST_CASE("Decomposition: shared out, partitioned and migrated, every particle l
   }
 }
 
-TEST_CASE("Decomposition: the whole set gathered on rank 0 alone, in rank order, and its figures sent to every rank",
+TEST_CASE("Decomposition: the whole set gathered on rank 0 alone, its figures sent to every rank, extremes reduced",
           "[mpi]") {
   mpi::Decomposition<2> d;
   ParticleSet<2, true> p = numbered_set(1000, 5);
@@ -281,6 +281,13 @@ TEST_CASE("Decomposition: the whole set gathered on rank 0 alone, in rank order,
   }
   d.broadcast(figures);
   CHECK(figures == std::array{1.5, -2.0, 1000.0});
+  // element-wise extremes over the ranks, in one reduction
+  const double r = c.rank(), last = c.size() - 1;
+  std::array<double, 2> least{r, -r}, largest{r, -r};
+  d.extreme_in_place(least, true);
+  d.extreme_in_place(largest, false);
+  CHECK(least == std::array{0.0, -last});
+  CHECK(largest == std::array{last, 0.0});
 }
 
 namespace {

@@ -540,6 +540,11 @@ class Decomposition {
     return comm_->exchange(std::vector<std::vector<double>>(static_cast<std::size_t>(ranks()), mine));
   }
 
+  /// Element-wise least (`least`) or largest values over the ranks, in one reduction: exact in any order.
+  void extreme_in_place(std::span<double> values, bool least) const {
+    if (ranks() > 1) comm_->reduce_in_place(values, least ? MPI_MIN : MPI_MAX);
+  }
+
   /// Element-wise sums over the ranks (MPI's order: the last bits may depend on the rank count).
   void sum_in_place(std::span<double> values) const {
     if (ranks() > 1) comm_->sum_in_place(values);
