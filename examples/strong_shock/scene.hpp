@@ -55,7 +55,7 @@ struct StrongShockParams {
 
 /// What a run leaves for the report, beside its cost.
 struct ShockRun : examples::RunCost {
-  std::vector<double> x, y, rho, v, P, u, h;
+  std::vector<double> x, y, rho, v, P, u;
   analysis::ShockTubeErrors errors;
   double shock_position = 0.0, shock_position_exact = 0.0, contact_exact = 0.0;
   double penetration = 0.0;  ///< fraction of particles beyond contact + 2h that carry left-state gas
@@ -132,7 +132,6 @@ void measure(const Sim& sim, const StrongShockParams& s, ShockRun& r) {
     r.v.push_back(p.v[a][0]);
     r.P.push_back(p.P[a]);
     r.u.push_back(p.u[a]);
-    r.h.push_back(p.h[a]);
   }
   const double t = sim.time();
   r.shock_position_exact = 0.5 + exact.right_shock_speed() * t;

@@ -3,9 +3,10 @@
 // relaxes toward the circular orbit of the Keplerian zones (keplerian_zones.hpp),
 //   dv/dt = -(v - v0(x)) R(r) / tau,
 // R a parabola from 1 at the edge of the free gas to 0 at the zone's far side, and tau a fraction of the orbital
-// period at that edge. The zones lie just inside the free disk, beside the fixed orbits of §5.1: they take up the
-// waves and the noise that would otherwise grow against the fixed gas. Unlike a grid code's zones, they leave
-// the surface density alone: every particle keeps its mass.
+// period at that edge. The zones lie just inside the free disk, beside the fixed orbits of §5.1, and take up the
+// radial motion that reaches the edges, as a grid code's zones take up its waves (on the orbit-following rings
+// they keep the inner zone from filling, but not the disk's own noise from growing: docs/results/rings.md).
+// Unlike a grid code's zones, they leave the surface density alone: every particle keeps its mass.
 #include "rsph/core/dimension.hpp"
 #include "rsph/core/errors.hpp"
 #include "rsph/paper/keplerian_zones.hpp"
