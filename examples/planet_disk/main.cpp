@@ -132,6 +132,9 @@ std::optional<Options> parse_options(int argc, char** argv) {
        "global step; SPH always steps globally)");
   flag("alpha", s.alpha, "SPH artificial viscosity alpha");
   flag("beta", s.beta, "SPH artificial viscosity beta");
+  flag("rsph-alpha", s.rsph_alpha,
+       "2D RSPH: artificial viscosity alpha, scaled by Balsara's switch (0: none, the paper's RSPH)");
+  flag("rsph-beta", s.rsph_beta, "2D RSPH: the switched viscosity's beta (with --rsph-alpha 1, 2 as SPH's)");
   flag("n-min", s.N_min, "Appendix A: N_min");
   flag("n-max", s.N_max, "Appendix A: N_max");
   flag("dn-max", s.dN_max, "Appendix A: delta N_max");
@@ -205,6 +208,7 @@ io::Json disk_summary(const Options& opt, const scenes::DiskRun& r, const FinalF
   summary.set("lattice", s.dim == 3 ? (s.rsph() ? "cubic" : "columns") : s.lattice);
   summary.set("damping_width", s.damping_width);
   if (s.damping_width > 0.0) summary.set("damping_tau", s.damping_tau);
+  if (s.dim == 2 && s.rsph()) summary.set("rsph_alpha", s.rsph_alpha).set("rsph_beta", s.rsph_beta);
   if (s.dim == 3) summary.set("surface_in_H", s.surface);
   summary.set("particles_initial", r.particles_initial).set("particles_final", r.particles_final);
   summary.set("particles_mean", r.mean_particles).set("particles_removed", r.particles_removed);

@@ -48,7 +48,10 @@ struct PlanetDiskParams {
   double ramp_orbits = 5.0;                  ///< eq. (20)
   double N_min = 4.5, N_max = 107.0, dN_max = 0.8;  ///< Appendix A, the paper's §5 values
   int max_steps = 160;
-  double alpha = 1.0, beta = 2.0;      ///< SPH artificial viscosity
+  double alpha = 1.0, beta = 2.0;  ///< SPH artificial viscosity
+  /// RSPH 2D: an artificial viscosity with Balsara's switch (physics::SwitchedViscosity; 0 and 0: none, the
+  /// paper's RSPH)
+  double rsph_alpha = 0.0, rsph_beta = 0.0;
   double measure_every = 1.0;          ///< orbits between measurements (mass, gap depth)
   double bin_width = 0.02;             ///< annuli of the azimuthal average
   double courant = 0.3, force = 0.25;  ///< time-step factors
@@ -88,6 +91,9 @@ struct PlanetDiskParams {
     require(measure_every > 0.0 && bin_width > 0.0, "planet disk: measurement interval and bin width must be positive");
     require(courant > 0.0 && courant <= 1.0 && force > 0.0, "planet disk: bad time-step factors");
     require(max_bin >= 0 && max_bin <= 12, "planet disk: max_bin must lie in [0, 12]");
+    require(rsph_alpha >= 0.0 && rsph_beta >= 0.0, "planet disk: --rsph-alpha and --rsph-beta must not be negative");
+    require((rsph_alpha == 0.0 && rsph_beta == 0.0) || (dim == 2 && rsph()),
+            "planet disk: --rsph-alpha and --rsph-beta are for the 2D RSPH disk (SPH takes --alpha and --beta)");
   }
   bool rsph() const { return method == "rsph"; }
   double area() const { return std::numbers::pi * (r_out * r_out - r_in * r_in); }
@@ -131,6 +137,7 @@ struct PlanetDiskParams {
   }
   paper::KeplerianZones zones() const { return {1.0, r_in + zone(), r_out - zone(), v_factor(), keep_zone_members}; }
   paper::DampingZones damping() const { return {zones(), damping_width, damping_width, damping_tau}; }
+  physics::SwitchedViscosity rsph_viscosity() const { return {{rsph_alpha, rsph_beta}}; }
   Box<2> box() const {
     Box<2> b;
     b.lo = Vec<2>(-r_out - 1.0, -r_out - 1.0);
@@ -319,9 +326,10 @@ DiskRun run_disk(Sim& sim, const PlanetDiskParams& s, OnStep&& on_step, OnSample
 }  // namespace detail
 
 /// The scene's methods: RSPH with Appendix A's schedule and the annulus closing the edge cells (on the rings
-/// lattice the edges are rings, whose cells take in what lies beyond: no region), and equal-mass grad-h SPH
-/// with artificial viscosity; both with the star and planet and the boundary zones; with any kernel (the cubic
-/// spline by default; the measurements take the cubic spline whatever the run's).
+/// lattice the edges are rings, whose cells take in what lies beyond: no region; an artificial viscosity with
+/// Balsara's switch, off unless asked for), and equal-mass grad-h SPH with artificial viscosity; both with the star and
+/// planet and the boundary zones; with any kernel (the cubic spline by default; the measurements take the cubic spline
+/// whatever the run's).
 template <class Lattice>
 using DiskRegion = std::conditional_t<PerSiteLattice<Lattice>, region::Unbounded, region::Annulus>;
 template <class Lattice, class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline>
@@ -331,7 +339,7 @@ using DiskRegularizer = regularize::LatticeRegularizer<Lattice, schedule::Adapti
 template <class Lattice, class EOS, class Order = regularize::FirstOrder, class Kernel = kernel::CubicSpline,
           class... Extra>
 using RsphDisk = Simulation<2, Kernel, EOS, DiskRegularizer<Lattice, Order, Kernel>, paper::StarAndPlanet,
-                            paper::KeplerianZones, paper::DampingZones, Extra...>;
+                            paper::KeplerianZones, paper::DampingZones, physics::SwitchedViscosity, Extra...>;
 template <class EOS, class Kernel = kernel::CubicSpline, class... Extra>
 using SphDisk = Simulation<2, Kernel, EOS, regularize::None, physics::GradH<2>, physics::ArtificialViscosity,
                            paper::StarAndPlanet, paper::KeplerianZones, paper::DampingZones, Extra...>;
@@ -364,7 +372,7 @@ RsphDisk<Lattice, EOS, Order, Kernel, Extra...> make_rsph_disk(const PlanetDiskP
       {.remap = remap, .region = disk_region<Lattice>(s), .order = order});
   return RsphDisk<Lattice, EOS, Order, Kernel, Extra...>(disk_particles_on<Kernel>(s, lat), s.box(), std::move(eos),
                                                          std::move(reg), disk_time_steps(s), s.star_planet(), s.zones(),
-                                                         s.damping(), std::move(extra)...);
+                                                         s.damping(), s.rsph_viscosity(), std::move(extra)...);
 }
 
 template <class Kernel = kernel::CubicSpline, class Lattice, class EOS, class... Extra>

@@ -48,6 +48,7 @@
 #include "rsph/physics/point_mass.hpp"
 #include "rsph/physics/shear_viscosity.hpp"
 #include "rsph/physics/smoothing_length.hpp"
+#include "rsph/physics/viscosity_switch.hpp"
 #include "rsph/regularize/concept.hpp"
 #include "rsph/regularize/lattice.hpp"
 #include "rsph/regularize/lattice_regularizer.hpp"

@@ -77,6 +77,9 @@ class Simulation {
   /// A viscous stress term (Navier-Stokes) adds a velocity-gradient pass before the force sum.
   static constexpr bool has_stress = (StressTerm<Terms, D> || ...);
   static_assert((int(StressTerm<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one viscous stress term");
+  /// A viscosity switch (Balsara's) adds a velocity-gradient pass for its per-particle factors.
+  static constexpr bool has_switch = (ViscositySwitch<Terms, D> || ...);
+  static_assert((int(ViscositySwitch<Terms, D>) + ... + 0) <= 1, "a simulation takes at most one viscosity switch");
   /// Consistent pair gradients (physics/consistent_gradient.hpp): the density follows the continuity
   /// equation from the remapped rho = m / V, and pairs use G_ab, so uniform states are exact equilibria.
   static constexpr bool corrected = (GradientCorrection<Terms> || ...);
@@ -86,7 +89,8 @@ class Simulation {
   using Particles = ParticleSet<D, has_energy>;
   using KernelType = Kernel;
   /// The compile-time switches the pair loops take (physics/loops/scheme.hpp).
-  using LoopScheme = physics::loops::Scheme<Kernel, D, has_energy, has_pressure, grad_h, corrected, has_stress>;
+  using LoopScheme =
+      physics::loops::Scheme<Kernel, D, has_energy, has_pressure, grad_h, corrected, has_stress, has_switch>;
   /// The density pass also sums n_a of eq. (A1) when the regularizer's schedule uses it (fixed h only).
   static constexpr bool wants_number_density = !grad_h && requires { requires Reg::wants_number_density; };
   /// Runs on the ranks of a communicator when a scene names a domain decomposition (mpi/decomposition.hpp).
@@ -206,7 +210,8 @@ class Simulation {
   /// (io/checkpoint.hpp): the real particles with their rates (taken at the predicted state, so they cannot be
   /// recomputed from the final one), the signal speeds, d rho/dt, the clocks and counters, the regularizer's
   /// state and the consistent-gradient solve's warm start. Restored, the next step continues bit for bit as
-  /// the saved run would have: it rebuilds ghosts, neighbours and every other pass from these.
+  /// the saved run would have: it rebuilds ghosts, neighbours and every other pass from these (a viscosity
+  /// switch's factors are saved too: the substeps of a block read the last evaluation's).
   /// On many ranks every rank adds its own particles (the archive writes them into one file, mpi::FileTurns);
   /// restored on any rank count, each rank takes a share of the file's particles and the decomposition
   /// partitions them afresh. The clocks and the regularizer's log are rank 0's.
@@ -216,6 +221,10 @@ class Simulation {
     p_.checkpoint(ar);
     ar.rows("v_sig", v_sig_);
     ar.rows("drho_dt", drho_dt_);
+    if constexpr (has_switch) {  // the real particles' factors, which a block's substeps read
+      switch_.resize(p_.n_real);
+      ar.rows("switch_factor", switch_);
+    }
     ar("time", time_);
     ar("step", step_);
     ar.total("particle_updates", particle_updates_);
@@ -259,6 +268,7 @@ class Simulation {
     auto t0 = clock::now();
     if constexpr (corrected) cg_.template update<Kernel>(correction(), p_, box_, nl_, solve_on_ranks());
     if constexpr (has_stress) stress_pass();
+    if constexpr (has_switch) switch_pass();
     if (params_.max_bin > 0 || corrected)
       force_pass<true>(neighbors::FirstN{p_.n_real});
     else
@@ -277,6 +287,9 @@ class Simulation {
   }
   const auto& stress_term() const {
     return std::get<first_of_kind<sizeof...(Terms)>({StressTerm<Terms, D>...})>(terms_);
+  }
+  const auto& switch_term() const {
+    return std::get<first_of_kind<sizeof...(Terms)>({ViscositySwitch<Terms, D>...})>(terms_);
   }
   const auto& correction() const {
     return std::get<first_of_kind<sizeof...(Terms)>({GradientCorrection<Terms>...})>(terms_);
@@ -297,14 +310,23 @@ class Simulation {
       for (std::size_t a = 0; a < n; ++a) work_[a] += static_cast<double>(nl_.count(a));
     v_sig_.resize(n);
     drho_dt_.resize(n);
+    const auto balance = [&](auto&... f) { d.balance(p_, std::span<const double>(work_), v_sig_, drho_dt_, f...); };
+    const auto factors = [&] {  // the switch's factors go along: the substeps of a block read them
+      if constexpr (has_switch) {
+        switch_.resize(n);
+        return std::tie(switch_);
+      } else {
+        return std::tuple<>();
+      }
+    };
     if constexpr (corrected) {  // psi goes along, the next solve's warm start as in one process
       if (cg_.psi.size() >= n) {
         cg_.psi.resize(n);
-        d.balance(p_, std::span<const double>(work_), v_sig_, drho_dt_, cg_.psi);
+        std::apply([&](auto&... f) { balance(cg_.psi, f...); }, factors());
         return;
       }
     }
-    d.balance(p_, std::span<const double>(work_), v_sig_, drho_dt_);
+    std::apply(balance, factors());
   }
 
   /// What the consistent-gradient solve needs on many ranks (halo values, sums, gathers); empty in one process.
@@ -342,6 +364,24 @@ class Simulation {
     if constexpr (distributed)
       if (on_many_ranks()) domain().refresh_halos(S_over_rho2_);
     physics::loops::stress_images(p_, box_, S_over_rho2_);
+  }
+
+  /// A viscosity switch's factor of every real particle from its velocity gradient (zero while the switch is
+  /// off), then the ghosts'.
+  void switch_pass() {
+    if (switch_term().active())
+      physics::loops::switch_factors<LoopScheme>(p_, nl_, switch_term(), switch_);
+    else
+      switch_.assign(p_.n_real, 0.0);
+    switch_ghosts();
+  }
+  /// The switch's factors on the ghosts of the moment: on many ranks the halos' from their owners, then the
+  /// images'. Between the evaluations of a whole block, a particle keeps the factor of the last one.
+  void switch_ghosts() {
+    switch_.resize(p_.size_with_ghosts());
+    if constexpr (distributed)
+      if (on_many_ranks()) domain().refresh_halos(switch_);
+    physics::loops::scalar_images(p_, switch_);
   }
 
   /// After the pressure pass: the fields a later pass reads, on the halos of other ranks' particles, then on
@@ -492,6 +532,7 @@ class Simulation {
     if constexpr (has_pressure) f.P_over_rho2 = P_over_rho2_;
     if constexpr (grad_h) f.Omega = gradh_.Omega;
     if constexpr (has_stress) f.S_over_rho2 = S_over_rho2_;
+    if constexpr (has_switch) f.switch_factor = switch_;
     if constexpr (corrected) {
       f.psi = cg_.psi;
       f.band = cg_.band;
@@ -516,6 +557,7 @@ class Simulation {
     update_pressure();
     times_.density += seconds_since(t0);
     t0 = clock::now();
+    if constexpr (has_switch) switch_ghosts();  // the ghosts were made again
     force_pass<true>(rows);
     blocks_.evaluated_active(p_, time_);
     times_.forces += seconds_since(t0);
@@ -606,6 +648,7 @@ class Simulation {
   physics::loops::NumberDensity nd_;  ///< n_a of eq. (A1), only when the regularizer wants it
   [[no_unique_address]] std::conditional_t<grad_h, physics::GradHWorkspace, detail::Nothing> gradh_;
   std::vector<Mat<D>> S_over_rho2_;  ///< viscous stress / rho^2 (real and ghosts), only with a stress term
+  std::vector<double> switch_;       ///< a viscosity switch's factors (real and ghosts), only with a switch
   [[no_unique_address]] std::conditional_t<corrected, physics::ConsistentGradientWorkspace<D>, detail::Nothing> cg_;
   double time_ = 0.0;
   std::uint64_t step_ = 0;

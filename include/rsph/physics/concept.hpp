@@ -19,6 +19,15 @@ concept PairTerm = requires(const T& t, const physics::Pair<D>& pair) {
   { t.pair(pair) } -> std::same_as<physics::PairRates<D>>;
 };
 
+/// A pair term scaled by a per-particle factor of the velocity gradient (Balsara's switch on the artificial
+/// viscosity): the driver runs a gradient pass before the force sum and hands each pair both factors
+/// (Pair::switch_a, switch_b); active() false skips the pass.
+template <class T, int D>
+concept ViscositySwitch = PairTerm<T, D> && requires(const T& t, const Mat<D>& grad_v, double cs, double h) {
+  { t.switch_factor(grad_v, cs, h) } -> std::same_as<double>;
+  { t.active() } -> std::same_as<bool>;
+};
+
 /// A stress built from each particle's velocity gradient (Navier-Stokes viscosity); the driver runs a
 /// gradient pass before the force sum when a scene names one.
 template <class T, int D>
@@ -125,7 +134,9 @@ constexpr std::size_t first_of_kind(std::array<bool, N> is_kind) {
 template <class T, int D>
 constexpr bool check_term() {
   static_assert(Term<T, D>,
-                "a physics term must provide one of: `PairRates<D> pair(const Pair<D>&) const` (pair term), "
+                "a physics term must provide one of: `PairRates<D> pair(const Pair<D>&) const` (pair term; a "
+                "switched one adds `double switch_factor(const Mat<D>& grad_v, double cs, double h) const` and "
+                "`bool active() const`), "
                 "`Mat<D> stress(const Mat<D>& grad_v, double rho) const` with `double signal_speed(double h) const` "
                 "(viscous stress), `Vec<D> acceleration(const Vec<D>& x, double t) const` (body force), "
                 "`solves_smoothing_length` with `rho_of_h` and `h_of_rho` (adaptive h), or "

@@ -17,8 +17,9 @@ struct Pair {
   double P_a = 0.0, P_b = 0.0;  ///< zero for a gas that exerts no pressure (the driver skips them)
   /// P / rho^2 of each side, as eqs. (3)-(4) use it: the driver divides once per particle, not per pair.
   double P_over_rho2_a = 0.0, P_over_rho2_b = 0.0;
-  double u_a = 0.0, u_b = 0.0;          ///< specific internal energies, zero when the gas carries none
-  double Omega_a = 1.0, Omega_b = 1.0;  ///< grad-h correction factors, 1 with fixed h
+  double u_a = 0.0, u_b = 0.0;            ///< specific internal energies, zero when the gas carries none
+  double Omega_a = 1.0, Omega_b = 1.0;    ///< grad-h correction factors, 1 with fixed h
+  double switch_a = 1.0, switch_b = 1.0;  ///< a viscosity switch's factors (ViscositySwitch), 1 without one
 };
 
 /// Contribution of b to the rates of a.

@@ -25,11 +25,12 @@ namespace rsph::physics::loops {
 /// scheme does not use stay empty.
 template <int D>
 struct ForceFields {
-  std::span<const double> P_over_rho2;  ///< P / rho^2, refreshed with the pressure (has_pressure)
-  std::span<const double> Omega;        ///< grad-h factors (grad_h)
-  std::span<const Mat<D>> S_over_rho2;  ///< viscous stress / rho^2 (has_stress)
-  std::span<const Vec<D>> psi;          ///< the consistent gradient's psi (corrected)
-  std::span<const std::uint8_t> band;   ///< whether a point takes part in the corrected gradient (corrected)
+  std::span<const double> P_over_rho2;    ///< P / rho^2, refreshed with the pressure (has_pressure)
+  std::span<const double> Omega;          ///< grad-h factors (grad_h)
+  std::span<const Mat<D>> S_over_rho2;    ///< viscous stress / rho^2 (has_stress)
+  std::span<const Vec<D>> psi;            ///< the consistent gradient's psi (corrected)
+  std::span<const std::uint8_t> band;     ///< whether a point takes part in the corrected gradient (corrected)
+  std::span<const double> switch_factor;  ///< a viscosity switch's factor of each point (has_switch)
 };
 
 /// What the force pass writes besides dv/dt and du/dt: the signal speed of each real point, and d rho/dt
@@ -101,6 +102,7 @@ template <class S, class P>
   pr.cs_a = p.cs[a];
   pr.u_a = energy_of<S::has_energy>(p, a);
   if constexpr (S::grad_h) pr.Omega_a = f.Omega[a];
+  if constexpr (S::has_switch) pr.switch_a = f.switch_factor[a];
 }
 
 /// Accelerations and heating rates of the points of `rows` at time `time` (for body forces);
@@ -144,6 +146,7 @@ void force_rows(P& p, const neighbors::NeighborList& nl, const Rows& rows, const
       }
       pr.cs_b = p.cs[b];
       pr.u_b = energy_of<S::has_energy>(p, b);
+      if constexpr (S::has_switch) pr.switch_b = f.switch_factor[b];
       if constexpr (S::grad_h) {
         pr.grad_W_a = kernel::grad_W_inv_h<Kernel, D>(pr.r_ab, pr.r, inv_h_a);
         pr.grad_W_b = kernel::grad_W<Kernel, D>(pr.r_ab, pr.r, h_b);

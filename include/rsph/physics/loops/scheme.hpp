@@ -5,7 +5,7 @@
 namespace rsph::physics::loops {
 
 template <class Kernel_, int D, bool has_energy_, bool has_pressure_ = true, bool grad_h_ = false,
-          bool corrected_ = false, bool has_stress_ = false>
+          bool corrected_ = false, bool has_stress_ = false, bool has_switch_ = false>
 struct Scheme {
   using Kernel = Kernel_;
   static constexpr int dim = D;
@@ -14,6 +14,7 @@ struct Scheme {
   static constexpr bool grad_h = grad_h_;              ///< grad-h SPH (physics/smoothing_length.hpp)
   static constexpr bool corrected = corrected_;        ///< consistent gradients (physics/consistent_gradient.hpp)
   static constexpr bool has_stress = has_stress_;      ///< a viscous stress term (physics/shear_viscosity.hpp)
+  static constexpr bool has_switch = has_switch_;      ///< a viscosity switch (physics/viscosity_switch.hpp)
 };
 
 /// The specific internal energy of point a, zero for a gas that carries none.
