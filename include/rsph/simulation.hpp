@@ -467,7 +467,7 @@ class Simulation {
     auto t0 = clock::now();
     const auto plan = blocks_.plan(p_, v_sig_, params_, limit, time_,
                                    [this]([[maybe_unused]] double& lo, [[maybe_unused]] double& hi) {
-                                     if constexpr (distributed) lo = domain().min(lo), hi = domain().max(hi);
+                                     if constexpr (distributed) domain().min_max(lo, hi);
                                    });
     times_.integrate += seconds_since(t0);
     for (std::uint64_t sub = 0; sub < plan.n_sub; ++sub) {

@@ -288,6 +288,10 @@ TEST_CASE("Decomposition: the whole set gathered on rank 0 alone, its figures se
   d.extreme_in_place(largest, false);
   CHECK(least == std::array{0.0, -last});
   CHECK(largest == std::array{last, 0.0});
+  double lo = 10.0 + r, hi = -r;  // the least and the largest of two values, together
+  d.min_max(lo, hi);
+  CHECK(lo == 10.0);
+  CHECK(hi == 0.0);
 }
 
 namespace {

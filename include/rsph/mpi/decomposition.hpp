@@ -342,6 +342,13 @@ class Decomposition {
 
   double min(double v) const { return ranks() == 1 ? v : comm_->min(v); }
   double max(double v) const { return ranks() == 1 ? v : comm_->max(v); }
+  /// The least `lo` and the largest `hi` over the ranks, in one reduction (the least of lo and of -hi: exact).
+  void min_max(double& lo, double& hi) const {
+    std::array<double, 2> v{lo, -hi};
+    extreme_in_place(v, true);
+    lo = v[0];
+    hi = -v[1];
+  }
   bool any(bool v) const { return ranks() == 1 ? v : comm_->any(v); }
   bool all(bool v) const { return ranks() == 1 ? v : comm_->all(v); }
   std::uint64_t sum(std::uint64_t v) const { return ranks() == 1 ? v : comm_->sum(v); }

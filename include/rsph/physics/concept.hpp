@@ -96,7 +96,7 @@ concept GradientCorrection = requires(const T& t) {
 /// on time steps and checks. It names no MPI type, so the driver needs nothing of MPI.
 template <class T, int D>
 concept DomainDecomposition = requires(T& t, const T& c, ParticleSet<D, false>& p, const Box<D>& box,
-                                       std::vector<double>& f, std::span<const double> work) {
+                                       std::vector<double>& f, std::span<const double> work, double& x) {
   requires T::decomposes_domain;
   t.distribute(p);
   t.balance(p, work);
@@ -105,6 +105,7 @@ concept DomainDecomposition = requires(T& t, const T& c, ParticleSet<D, false>& 
   { c.ranks() } -> std::convertible_to<int>;
   { c.min(1.0) } -> std::same_as<double>;
   { c.max(1.0) } -> std::same_as<double>;
+  c.min_max(x, x);
   { c.any(true) } -> std::same_as<bool>;
   { c.all(true) } -> std::same_as<bool>;
 };
@@ -146,7 +147,7 @@ constexpr bool check_term() {
                 "const` (damping zone), or "
                 "`corrects_gradient` with `tolerance`, `max_iterations` and `every_step` "
                 "(consistent pair gradients), or `decomposes_domain` with `distribute`, `balance`, `make_ghosts`, "
-                "`refresh_halos` and the reductions `ranks`, `min`, `max`, `any`, `all` (many ranks)");
+                "`refresh_halos` and the reductions `ranks`, `min`, `max`, `min_max`, `any`, `all` (many ranks)");
   return true;
 }
 
