@@ -1,12 +1,14 @@
 #!/usr/bin/python3
 """The planet disk against FARGO3D: for each run folder of rsph-planet-disk (summary.json, profile.csv), the
 azimuthal average's L1 against FARGO3D's converged 768 x 256 profile over 0.6-2.0 and each region, the gap depth
-and the CPU time; writes a markdown table and draws error against cost, a point per run, a line per lattice and
-remap, FARGO3D's three resolutions as points on the same chart, and the profiles over FARGO3D's.
+and the CPU time, and the figures of the cuts of Figs. 13 and 14 (cut_figures); writes markdown tables and draws
+error against cost, a point per run, a line per lattice and remap, FARGO3D's three resolutions as points on the
+same chart, and the profiles over FARGO3D's.
 
   disk_vs_fargo3d.py out/disk_square out/disk_rings_first out/disk_rings_second --png disk_vs_fargo3d.png
 """
 import argparse
+import math
 import os
 import sys
 
@@ -25,8 +27,44 @@ def run_row(folder):
     prof = read_csv(os.path.join(folder, "profile.csv"))
     l1 = fargo3d_l1s(prof["r"], prof["sigma_over_sigma0"])
     label = f"{s.get('method', 'rsph')} {s.get('lattice', 'square')} {s.get('remap', '')}".strip()
+    if s.get("rsph_alpha", 0.0) > 0.0:
+        label += f" switched viscosity {s['rsph_alpha']:g}/{s['rsph_beta']:g}"
     return {"folder": folder, "label": label, "particles": s["particles_initial"], "orbits": s["orbits"],
-            "cpu": s["cpu_seconds"], "gap": s["gap_depth"], "l1": l1, "profile": prof}
+            "cpu": s["cpu_seconds"], "gap": s["gap_depth"], "l1": l1, "profile": prof, "cuts": cut_figures(folder)}
+
+
+def cut_figures(folder):
+    """The cuts of Figs. 13 and 14: opposite the planet (cut_phi_pi.csv) the gap's least Sigma/Sigma0 over
+    0.8-1.2 and the largest beside it (0.6-0.9, 1.2-1.8), each with its radius; along the orbit (cut_r_a.csv) the
+    largest Sigma within 40-80 degrees ahead of the planet (L4) and behind it (L5), over the median of the orbit
+    farther than 100 degrees from the planet: above 1, gas gathered at the Lagrange points."""
+    opp = read_csv(os.path.join(folder, "cut_phi_pi.csv"))
+    pairs = list(zip(opp["r"], opp["sigma_over_sigma0"]))
+
+    def extreme(lo, hi, pick):
+        return pick(((v, r) for r, v in pairs if lo <= r <= hi), default=(float("nan"), float("nan")))
+
+    orbit = read_csv(os.path.join(folder, "cut_r_a.csv"))
+    deg = [(math.degrees(p), v) for p, v in zip(orbit["phi"], orbit["sigma_over_sigma0"])]
+    far = sorted(v for d, v in deg if abs(d) > 100.0)
+    floor = far[len(far) // 2] if far else float("nan")
+
+    def lagrange(sign):
+        return max((v for d, v in deg if 40.0 <= sign * d <= 80.0), default=float("nan")) / floor
+
+    return {"gap": extreme(0.8, 1.2, min), "inner": extreme(0.6, 0.9, max), "outer": extreme(1.2, 1.8, max),
+            "floor": floor, "L4": lagrange(1.0), "L5": lagrange(-1.0)}
+
+
+def cut_table(rows):
+    lines = ["| run | opposite: gap's least (r) | inner peak (r) | outer peak (r) | along the orbit: median away "
+             "from the planet | L4 / median | L5 / median |", "|---" * 7 + "|"]
+    for r in rows:
+        c = r["cuts"]
+        lines.append(f"| {r['label']} | {c['gap'][0]:.3f} ({c['gap'][1]:.2f}) | {c['inner'][0]:.2f} "
+                     f"({c['inner'][1]:.2f}) | {c['outer'][0]:.2f} ({c['outer'][1]:.2f}) | {c['floor']:.3f} | "
+                     f"{c['L4']:.2f} | {c['L5']:.2f} |")
+    return "\n".join(lines)
 
 
 def table(rows, fargo):
@@ -81,7 +119,7 @@ def main():
     if not fargo:
         sys.exit("disk_vs_fargo3d: no FARGO3D data in data/reference/fargo3d")
     rows = [run_row(f) for f in a.folders]
-    text = table(rows, fargo)
+    text = table(rows, fargo) + "\n\n" + cut_table(rows)
     print(text)
     if a.md:
         with open(a.md, "w") as f:

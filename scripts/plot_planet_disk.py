@@ -53,6 +53,7 @@ def main():
         c = read_csv(f"{d}/cut_r_a.csv")
         ax.plot(c["phi"], c["sigma_over_sigma0"], lw=1)
         ax.set_xlabel("phi - phi_p (r = a)")
+        ax.set_yscale("log")  # the planet's envelope and the gap's floor (L4, L5 at +-1.05) both in view
         ax.set_ylabel("Sigma / Sigma_0")
         ax.set_title("along the orbit (Fig. 14)", fontsize=9)
     ax_cut = fig.add_subplot(grid[n, 0])

@@ -122,7 +122,13 @@ def save_figure(fig, path, dpi=110):
 
 
 def method_label(summary):
-    """How a run is named in figures and tables: SPH, or RSPH with its remap's order."""
+    """How a run is named in figures and tables: SPH, or RSPH with its remap's order (and its lattice and
+    viscosity where they are not the paper's)."""
     if summary.get("method", "rsph") == "sph":
         return "SPH"
-    return f"RSPH {summary.get('remap', 'first')}-order remap"
+    label = f"RSPH {summary.get('remap', 'first')}-order remap"
+    if summary.get("lattice") in ("hexagonal", "rings"):
+        label += f", {summary['lattice']} lattice"
+    if summary.get("rsph_alpha", 0.0) > 0.0:
+        label += f", switched viscosity {summary['rsph_alpha']:g}/{summary['rsph_beta']:g}"
+    return label
