@@ -294,6 +294,32 @@ TEST_CASE("Decomposition: the whole set gathered on rank 0 alone, its figures se
   CHECK(hi == 0.0);
 }
 
+TEST_CASE("Decomposition: rows combined by name over the ranks that hold them, by their keepers", "[mpi]") {
+  mpi::Decomposition<2> d;
+  const auto c = world();
+  const int P = c.size(), me = c.rank();
+  // name 1000 on every rank, name 10 + me on this rank alone, name 20 + me / 2 on pairs of ranks
+  std::vector<double> rows{1000.0, 1.0 + me, 0.5 * me, 10.0 + me, 3.0, -1.0, 20.0 + me / 2, 0.1 * me, 1.0};
+  auto largest = rows;
+  d.combine_by_name(rows, 2, true);
+  d.combine_by_name(largest, 2, false);
+  double sum_1 = 0.0, sum_2 = 0.0;  // name 1000: added in rank order from zero
+  for (int r = 0; r < P; ++r) sum_1 += 1.0 + r, sum_2 += 0.5 * r;
+  CHECK(rows[0] == 1000.0);
+  CHECK(rows[1] == sum_1);
+  CHECK(rows[2] == sum_2);
+  CHECK(largest[1] == double(P));
+  CHECK(largest[2] == 0.5 * (P - 1));
+  CHECK(rows[4] == 3.0);  // a row of its own: unchanged when added, its largest with zero when not
+  CHECK(rows[5] == -1.0);
+  CHECK(largest[5] == 0.0);
+  const int partner = me % 2 == 0 ? me + 1 : me - 1;
+  const bool paired = partner < P;
+  CHECK(rows[7] == (paired ? 0.1 * std::min(me, partner) + 0.1 * std::max(me, partner) : 0.1 * me));
+  CHECK(rows[8] == (paired ? 2.0 : 1.0));
+  CHECK(largest[7] == (paired ? 0.1 * std::max(me, partner) : 0.1 * me));
+}
+
 namespace {
 
 /// The real particles of `p` (one rank's, with its halos and images) whose points within `width` (how many,

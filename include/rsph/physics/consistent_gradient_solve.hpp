@@ -25,11 +25,14 @@
 namespace rsph::physics {
 
 /// What the solve needs on many ranks (mpi/decomposition.hpp), where the band spans them: the halos' values of a
-/// per-point field from their owners, sums over the ranks, and every rank's values. Empty in one process.
+/// per-point field from their owners, sums over the ranks, and rows combined by name over them. Empty in one
+/// process.
 struct SolveOnRanks {
   std::function<void(std::vector<double>&)> refresh_halos;  ///< halo entries of a per-point field, from their owners
   std::function<double(double)> sum;                        ///< over the ranks
-  std::function<std::vector<double>(const std::vector<double>&)> gather;  ///< every rank's values, in rank order
+  /// rows of a name and w values, each row's values made the sum (`add`) or the largest of every rank's rows of its
+  /// name (Decomposition::combine_by_name)
+  std::function<void(std::vector<double>& rows, std::size_t w, bool add)> combine;
   bool active() const { return static_cast<bool>(sum); }
 };
 
@@ -228,7 +231,7 @@ class ConsistentGradientWorkspace {
 
   /// connected_pieces over the ranks: each piece is named by the least identity among its members, found by
   /// passing names across pairs and, between rounds, across the halos, until no rank changes one; whether a
-  /// mirror pair anchors it is gathered from every rank.
+  /// mirror pair anchors it is combined over the ranks that hold a part of it.
   template <class P>
   Anchors pieces_on_ranks(const P& p, const neighbors::NeighborList& nl, const SolveOnRanks& ranks) {
     const std::size_t n = p.n_real, m = members_.size();
@@ -277,12 +280,12 @@ class ConsistentGradientWorkspace {
       rows.push_back(nm);
       for (int ax = 0; ax < D; ++ax) rows.push_back(mine[static_cast<std::size_t>(c)][static_cast<std::size_t>(ax)]);
     }
-    const auto all = ranks.gather(rows);
+    ranks.combine(rows, D, false);  // anchored along an axis on any rank
     Anchors anchored(local.size());
-    for (std::size_t r = 0; r < all.size(); r += D + 1)
-      if (const auto it = local.find(all[r]); it != local.end())
-        for (int ax = 0; ax < D; ++ax)
-          anchored[static_cast<std::size_t>(it->second)][static_cast<std::size_t>(ax)] |= all[r + 1 + ax] != 0.0;
+    for (std::size_t r = 0; r < rows.size(); r += D + 1) {
+      const auto c = static_cast<std::size_t>(local.at(rows[r]));
+      for (int ax = 0; ax < D; ++ax) anchored[c][static_cast<std::size_t>(ax)] = rows[r + 1 + ax] != 0.0;
+    }
     piece_names_.assign(local.size(), 0.0);
     for (const auto& [nm, c] : local) piece_names_[static_cast<std::size_t>(c)] = nm;
     return anchored;
@@ -377,14 +380,9 @@ class ConsistentGradientWorkspace {
   void sum_pieces_over_ranks(std::vector<double>& sum, std::vector<double>& count, const SolveOnRanks& ranks) const {
     std::vector<double> rows;
     for (std::size_t c = 0; c < sum.size(); ++c) rows.insert(rows.end(), {piece_names_[c], sum[c], count[c]});
-    const auto all = ranks.gather(rows);
-    std::map<double, std::pair<double, double>> total;
-    for (std::size_t r = 0; r < all.size(); r += 3) {
-      auto& t = total[all[r]];
-      t.first += all[r + 1];
-      t.second += all[r + 2];
-    }
-    for (std::size_t c = 0; c < sum.size(); ++c) std::tie(sum[c], count[c]) = total[piece_names_[c]];
+    ranks.combine(rows, 2, true);
+    for (std::size_t c = 0; c < sum.size(); ++c)
+      std::tie(sum[c], count[c]) = std::pair(rows[3 * c + 1], rows[3 * c + 2]);
   }
 
   /// Ghosts take their source's psi (its mirrored components flipped) and band membership.
