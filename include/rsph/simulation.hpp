@@ -369,15 +369,17 @@ class Simulation {
   /// A viscosity switch's factor of every real particle from its velocity gradient (zero while the switch is
   /// off), then the ghosts'.
   void switch_pass() {
-    if (switch_term().active())
-      physics::loops::switch_factors<LoopScheme>(p_, nl_, switch_term(), switch_);
-    else
-      switch_.assign(p_.n_real, 0.0);
+    if (switch_term().active()) physics::loops::switch_factors<LoopScheme>(p_, nl_, switch_term(), switch_);
     switch_ghosts();
   }
   /// The switch's factors on the ghosts of the moment: on many ranks the halos' from their owners, then the
-  /// images'. Between the evaluations of a whole block, a particle keeps the factor of the last one.
+  /// images'. Between the evaluations of a whole block, a particle keeps the factor of the last one. A switch
+  /// that is off reads none: its zeros cost no pass and no message.
   void switch_ghosts() {
+    if (!switch_term().active()) {
+      switch_.assign(p_.size_with_ghosts(), 0.0);
+      return;
+    }
     switch_.resize(p_.size_with_ghosts());
     if constexpr (distributed)
       if (on_many_ranks()) domain().refresh_halos(switch_);
