@@ -13,6 +13,8 @@
 #include "rsph/regularize/remap.hpp"
 
 #include <algorithm>
+#include <cstdint>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <span>
@@ -39,29 +41,36 @@ void check_whole_blocks(const Box<D>& box, const lattice::MultiLevel<D, Criterio
     }
 }
 
-/// The level-0 mass and volume per block cell that the criteria read, summed from the finest cells' mass and
-/// volume (`finest(f)` gives the pair of cell f); block0 receives the absolute index of the grid's first block.
-template <int D, class Criterion, class Finest>
-refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box,
-                                   const CellGrid<D>& grid, Finest&& finest, BlockIndex<D>& block0) {
+/// The level-0 layout of the blocks of `whole` (mass and volume zero); block0 receives the absolute index of its
+/// first block.
+template <int D, class Criterion>
+refine::BlockField<D> level0_layout(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box,
+                                    const CellGrid<D>& whole, BlockIndex<D>& block0) {
   const std::int64_t ratio = std::int64_t{1} << ml.max_level;  // finest cells per level-0 cell and axis
   const std::int64_t align = ratio * ml.block_cells;           // finest cells per block and axis
   refine::BlockField<D> field;
   field.spacing = ml.spacing;
   field.cells_per_block = ml.block_cells;
-  std::array<std::int64_t, D> n0{};
   std::size_t n_level0 = 1;
   for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
-    n0[k] = grid.count[k] / ratio;
-    field.blocks[k] = grid.count[k] / align;
-    block0[k] = grid.range.lo[k] / align;  // aligned: exact
-    field.periods[k] = grid.periods[k] > 0 ? field.blocks[k] : 0;
+    field.blocks[k] = whole.count[k] / align;
+    block0[k] = whole.range.lo[k] / align;  // aligned: exact
+    field.periods[k] = whole.periods[k] > 0 ? field.blocks[k] : 0;
     field.origin[static_cast<int>(k)] =
-        box.lo[static_cast<int>(k)] + static_cast<double>(grid.range.lo[k]) * ml.finest().spacing;
-    n_level0 *= static_cast<std::size_t>(n0[k]);
+        box.lo[static_cast<int>(k)] + static_cast<double>(whole.range.lo[k]) * ml.finest().spacing;
+    n_level0 *= static_cast<std::size_t>(whole.count[k] / ratio);
   }
   field.mass.assign(n_level0, 0.0);
   field.volume.assign(n_level0, 0.0);
+  return field;
+}
+
+/// Adds to `field` (laid out on `whole`) the finest cells' mass and volume of `grid`, a block-aligned part of
+/// `whole` (`finest(f)` gives the pair of cell f), in the order of grid's cells.
+template <int D, class Criterion, class Finest>
+void add_finest_cells(refine::BlockField<D>& field, const lattice::MultiLevel<D, Criterion>& ml,
+                      const CellGrid<D>& whole, const CellGrid<D>& grid, Finest&& finest) {
+  const std::int64_t ratio = std::int64_t{1} << ml.max_level;
   for (std::size_t f = 0; f < grid.n_cells; ++f) {
     const auto [m, volume] = finest(f);
     if (volume == 0.0) continue;
@@ -69,28 +78,27 @@ refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, 
     std::size_t c = 0;
     for (int k = D - 1; k >= 0; --k) {
       const auto kk = static_cast<std::size_t>(k);
-      c = c * static_cast<std::size_t>(n0[kk]) + static_cast<std::size_t>((idx[kk] - grid.range.lo[kk]) / ratio);
+      c = c * static_cast<std::size_t>(whole.count[kk] / ratio) +
+          static_cast<std::size_t>((idx[kk] - whole.range.lo[kk]) / ratio);
     }
     field.mass[c] += m;
     field.volume[c] += volume;
   }
-  return field;
 }
 
-/// The field the criteria read: from this process's sums, or on many ranks (every rank lays out the same grid)
-/// the whole set's, each finest cell's mass and volume taken from the rank that owns it, whose overlaps there
-/// are complete. Every rank then holds the same bits, as one process would sum them in the same order.
+/// The field the criteria read, over the blocks of the whole set's grid `whole`: from this process's sums on it,
+/// or on many ranks from each rank's sums on its part `grid`: a rank adds the finest cells whose site it owns (its
+/// overlaps there are complete) into its level-0 cells, and the ranks' level-0 cells are summed, so that every rank
+/// holds the same bits. What travels is one pair a level-0 cell, not one a finest cell.
 template <int D, class Criterion, class Lattice>
 refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box, const Lattice& fine,
-                                   const CellGrid<D>& grid, const Sums<D>& S, const RankPart& part,
-                                   BlockIndex<D>& block0) {
-  if (!part.on_ranks())
-    return level0_field(
-        ml, box, grid,
-        [&](std::size_t f) {
-          return std::pair{S.cell[f].m, S.cell[f].volume};
-        },
-        block0);
+                                   const CellGrid<D>& whole, const CellGrid<D>& grid, const Sums<D>& S,
+                                   const RankPart& part, BlockIndex<D>& block0) {
+  auto field = level0_layout(ml, box, whole, block0);
+  if (!part.on_ranks()) {
+    add_finest_cells(field, ml, whole, grid, [&](std::size_t f) { return std::pair{S.cell[f].m, S.cell[f].volume}; });
+    return field;
+  }
   std::vector<std::size_t> covered;  // the cells some old cell built here meets
   std::vector<double> sites;
   for (std::size_t f = 0; f < grid.n_cells; ++f)
@@ -100,16 +108,63 @@ refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, 
       sites.insert(sites.end(), x.data(), x.data() + D);
     }
   const auto mine = part.owns(sites);
-  std::vector<double> mv(2 * grid.n_cells, 0.0);  // the owners' mass and volume, the others' zero
-  for (std::size_t i = 0; i < covered.size(); ++i)
-    if (mine[i]) mv[2 * covered[i]] = S.cell[covered[i]].m, mv[2 * covered[i] + 1] = S.cell[covered[i]].volume;
+  std::vector<std::uint8_t> owned(grid.n_cells, 0);
+  for (std::size_t i = 0; i < covered.size(); ++i) owned[covered[i]] = mine[i];
+  add_finest_cells(field, ml, whole, grid, [&](std::size_t f) {
+    return owned[f] ? std::pair{S.cell[f].m, S.cell[f].volume} : std::pair{0.0, 0.0};
+  });
+  const std::size_t n = field.mass.size();
+  std::vector<double> mv(2 * n);
+  std::copy(field.mass.begin(), field.mass.end(), mv.begin());
+  std::copy(field.volume.begin(), field.volume.end(), mv.begin() + static_cast<std::ptrdiff_t>(n));
   part.sum_over_ranks(mv);
-  return level0_field(
-      ml, box, grid,
-      [&](std::size_t f) {
-        return std::pair{mv[2 * f], mv[2 * f + 1]};
-      },
-      block0);
+  std::copy_n(mv.begin(), n, field.mass.begin());
+  std::copy_n(mv.begin() + static_cast<std::ptrdiff_t>(n), n, field.volume.begin());
+  return field;
+}
+
+/// The grids of a multi-level remap: `whole`, the whole set's (alike on every rank), on which the blocks and their
+/// levels are laid out, and `local`, the block-aligned part of it that the old cells built here reach, on which this
+/// rank sums (the whole on one process). A rank's memory then follows its particles, not the box; on periodic axes
+/// it spans the period. A rank that builds no cell sums on one block.
+template <int D>
+struct LevelGrids {
+  CellGrid<D> whole, local;
+};
+
+template <int D, class Criterion, bool E>
+LevelGrids<D> level_grids(const ParticleSet<D, E>& p, const Box<D>& box, const lattice::MultiLevel<D, Criterion>& ml,
+                          const RemapParams& params, const RankPart& part) {
+  const auto fine = ml.finest();
+  const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;  // finest cells per block and axis
+  LevelGrids<D> g{candidate_grid(p, box, fine, params, align, part), {}};
+  g.local = g.whole;
+  if (!part.on_ranks()) return g;
+  Vec<D> lo = Vec<D>::Constant(std::numeric_limits<double>::max()), hi = -lo;
+  double h_max = 0.0;
+  for (const std::uint32_t a : part.cells) {
+    lo = lo.cwiseMin(p.x[a]);
+    hi = hi.cwiseMax(p.x[a]);
+    h_max = std::max(h_max, p.h[a]);
+  }
+  const double reach = params.closing_radius_in_h * h_max * 1.1;
+  const auto touched = fine.cells_touching(box, (lo.array() - reach).matrix(), (hi.array() + reach).matrix());
+  auto floor_div = [](std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
+  double cells = 1.0;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
+    auto& r = g.local.range;
+    if (part.cells.empty()) {
+      r.hi[k] = r.lo[k] + align - 1;
+    } else if (g.whole.periods[k] == 0) {
+      r.lo[k] = std::max(g.whole.range.lo[k], floor_div(touched.lo[k], align) * align);
+      r.hi[k] = std::min(g.whole.range.hi[k], (floor_div(touched.hi[k], align) + 1) * align - 1);
+      if (r.hi[k] < r.lo[k]) r.hi[k] = r.lo[k] + align - 1;  // (no cell reaches the whole grid: one block)
+    }
+    g.local.count[k] = r.hi[k] - r.lo[k] + 1;
+    cells *= static_cast<double>(g.local.count[k]);
+  }
+  g.local.n_cells = static_cast<std::size_t>(cells);
+  return g;
 }
 
 /// Block b's absolute index (the grid's blocks start at block0).
@@ -136,15 +191,29 @@ std::vector<int> choose_levels(const lattice::MultiLevel<D, Criterion>& ml, cons
   return level;
 }
 
+/// The new cells of the blocks that lie in `grid`, a block-aligned part of the whole set's grid `whole` (on which
+/// `field` and `level` are laid out), each block at its level, in block order.
 template <int D>
-Footprint<D> footprint(const refine::BlockField<D>& field, const std::vector<int>& level, const CellGrid<D>& grid,
-                       int max_level, std::int64_t align, double dx) {
+Footprint<D> footprint(const refine::BlockField<D>& field, const std::vector<int>& level, const CellGrid<D>& whole,
+                       const CellGrid<D>& grid, int max_level, std::int64_t align, double dx) {
   Footprint<D> fp;
   fp.owner.resize(grid.n_cells);
-  fp.origin = field.origin;
   fp.dx = dx;
+  fp.origin = field.origin;
+  std::array<std::int64_t, D> first{}, last{};  // the blocks of `grid`, in whole's blocks
+  for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
+    fp.offset[k] = grid.range.lo[k] - whole.range.lo[k];
+    first[k] = fp.offset[k] / align;
+    last[k] = first[k] + grid.count[k] / align;
+  }
   for (std::size_t b = 0; b < level.size(); ++b) {
-    const auto bi = field.block_index(b);
+    auto bi = field.block_index(b);
+    bool inside = true;
+    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
+      inside = inside && bi[k] >= first[k] && bi[k] < last[k];
+      bi[k] -= first[k];
+    }
+    if (!inside) continue;
     const std::int64_t s = std::int64_t{1} << (max_level - level[b]);
     std::array<std::int64_t, D> ci;
     ci.fill(0);
@@ -155,6 +224,7 @@ Footprint<D> footprint(const refine::BlockField<D>& field, const std::vector<int
       fp.first_fine.push_back(f0);
       fp.span.push_back(s);
       fp.level.push_back(level[b]);
+      fp.block.push_back(b);
       std::array<std::int64_t, D> fi;  // every finest cell of the footprint
       fi.fill(0);
       do {
@@ -233,15 +303,9 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
   for (std::size_t c = 0; c < ws.elsewhere.size(); ++c)
     if (ws.elsewhere[c]) keep[c] = 0;
   const std::size_t n_cells = fp.size();
-  const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;
   auto& order = ws.order;
   order.resize(n_cells);
   std::iota(order.begin(), order.end(), std::size_t{0});
-  std::vector<std::size_t> block_of(n_cells);
-  for (std::size_t c = 0, b = 0; b < level.size(); ++b)
-    for (auto n = static_cast<std::size_t>(std::pow(static_cast<double>(align >> (ml.max_level - level[b])), D)); n > 0;
-         --n)
-      block_of[c++] = b;
   auto place = [&](std::size_t c) {
     const Vec<D> site = fp.site(c);
     const int l = fp.level[c];
@@ -249,7 +313,7 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
     if (ml.h_ramp > 0.0 && l > 0) {
       // distance to the nearest coarser neighbouring block (2:1 balance: one level coarser)
       const double ramp = ml.h_ramp * ml.spacing_at(l - 1);
-      const double d = distance_to_coarser_block(field, level, block_of[c], site, ramp);
+      const double d = distance_to_coarser_block(field, level, fp.block[c], site, ramp);
       if (d < ramp) h += (params.h_over_dx * ml.spacing_at(l - 1) - h) * (1.0 - d / ramp);
     }
     return std::pair{site, h};
@@ -263,26 +327,29 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
   ml.store_levels(std::move(levels));
 }
 
-/// The multi-level remap around the sums on the finest cells of `grid`: sums_on(grid, stats) gives them, and
+/// The multi-level remap around the sums on the finest cells of grids.local: sums_on(grid, stats) gives them, and
 /// once the level of every block is set, at_faces(fp, faces, stats) gives them again (a second-order remap
 /// takes the old cells that reach a face cell to first order, as the face cells' hand-out is). Then every
 /// block's level from the criterion (capped at the finest level, 2:1 balanced), one particle per kept cell,
 /// block by block and in lattice order within a block, with h = h_over_dx * Delta_l.
-/// `part`: on many ranks, the levels are every rank's alike, chosen from the whole set's field; the old cells
-/// built again at faces are among those built for the sums.
+/// `part`: on many ranks, the levels are every rank's alike, chosen from the whole set's field (one pair of numbers
+/// a level-0 cell summed over the ranks); each rank sums on its part of the finest grid, and the old cells built
+/// again at faces are among those built for the sums.
 template <int D, class Criterion, class Builder, bool E, class Region, class SumsOn, class AtFaces>
 RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                              Builder& builder, const RemapParams& params, const Region& region, RemapWorkspace<D>& ws,
-                             const CellGrid<D>& grid, SumsOn&& sums_on, AtFaces&& at_faces, const RankPart& part) {
+                             const LevelGrids<D>& grids, SumsOn&& sums_on, AtFaces&& at_faces, const RankPart& part) {
   const auto fine = ml.finest();
+  const CellGrid<D>& grid = grids.local;
   const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;  // finest cells per block and axis
   RemapStats stats;
+  stats.summed_cells = grid.n_cells;
   const Sums<D>* S = &sums_on(grid, stats);
   stats.max_volume_mismatch = S->max_mismatch;
   std::array<std::int64_t, D> block0{};
-  const auto field = level0_field(ml, box, fine, grid, *S, part, block0);
+  const auto field = level0_field(ml, box, fine, grids.whole, grid, *S, part, block0);
   const auto level = choose_levels(ml, field, block0, stats);
-  const auto fp = footprint(field, level, grid, ml.max_level, align, fine.spacing);
+  const auto fp = footprint(field, level, grids.whole, grid, ml.max_level, align, fine.spacing);
   Faces faces;
   if (ml.max_level > 0) {
     faces = level_faces(grid, fp);
@@ -308,7 +375,8 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
 
 /// Remaps `p` onto a multi-level lattice (detail::remap_onto_levels), each old cell handing out its mean by
 /// eqs. (6)-(9). Mass, momentum and total energy are conserved exactly as on a uniform lattice. `part`: on many
-/// ranks, the old cells built and the reductions; every rank lays out the whole set's grid and levels.
+/// ranks, the old cells built and the reductions; every rank lays out the whole set's blocks and levels, and sums on
+/// the part of the finest grid its old cells reach (level_grids).
 template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                               Builder& builder, const RemapParams& params, const Region& region = {},
@@ -319,10 +387,8 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   const auto fine = ml.finest();
   detail::check_remap_input(p, fine, params, part);
   detail::check_whole_blocks(box, ml);
-  const auto grid =
-      detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells, part);
   return detail::remap_onto_levels(
-      p, box, ml, builder, params, region, ws, grid,
+      p, box, ml, builder, params, region, ws, detail::level_grids(p, box, ml, params, part),
       [&](const detail::CellGrid<D>& g, RemapStats&) -> detail::Sums<D>& {
         // remap_face_cells picks the old cells to build again by their reach
         return detail::accumulate_overlaps(p, box, fine, builder, params, g, region, ws, ml.max_level > 0, false,

@@ -169,16 +169,20 @@ struct Footprint {
   std::vector<std::array<std::int64_t, D>> first_fine;
   std::vector<std::int64_t> span;
   std::vector<int> level;
-  Vec<D> origin;  ///< lower corner of the grid
-  double dx = 0;  ///< the finest spacing
+  std::vector<std::size_t> block;        ///< the block each new cell lies in (of the level field's blocks)
+  Vec<D> origin;                         ///< lower corner of the whole set's grid
+  std::array<std::int64_t, D> offset{};  ///< the grid's first finest cell in the whole set's grid
+  double dx = 0;                         ///< the finest spacing
 
   std::size_t size() const { return span.size(); }
+  /// Placed from the whole set's grid, so that a site has the same bits whichever part of it a rank sums on.
   Vec<D> site(std::size_t c) const {
     Vec<D> x;
-    for (int k = 0; k < D; ++k)
+    for (int k = 0; k < D; ++k) {
+      const auto kk = static_cast<std::size_t>(k);
       x[k] =
-          origin[k] +
-          (static_cast<double>(first_fine[c][static_cast<std::size_t>(k)]) + 0.5 * static_cast<double>(span[c])) * dx;
+          origin[k] + (static_cast<double>(first_fine[c][kk] + offset[kk]) + 0.5 * static_cast<double>(span[c])) * dx;
+    }
     return x;
   }
 };

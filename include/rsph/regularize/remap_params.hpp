@@ -114,6 +114,9 @@ struct RemapStats {
   int passes = 1;
   /// Second-order remap: old cells whose gradient the limiter cut (phi < 1 for rho, a velocity component or e).
   std::size_t limited_cells = 0;
+  /// Multi-level lattices: the cells of the finest grid the remap summed on, over the ranks each rank's part (a
+  /// diagnostic of memory, not logged).
+  std::size_t summed_cells = 0;
 
   /// Calls f(name, &RemapStats::field) for every scalar figure, in one fixed order: what a log saves, restores
   /// and totals iterates (per_level, a list, is left to its owners).
@@ -142,7 +145,8 @@ inline RemapStats over_ranks(RemapStats s, const RankPart& part) {
                            s.kinetic_converted,
                            static_cast<double>(s.dropped_cells),
                            static_cast<double>(s.first_order_cells),
-                           static_cast<double>(s.limited_cells)};
+                           static_cast<double>(s.limited_cells),
+                           static_cast<double>(s.summed_cells)};
   for (const std::size_t n : s.per_level) sums.push_back(static_cast<double>(n));  // alike in length on every rank
   part.sum_over_ranks(sums);
   auto count = [&](std::size_t k) { return static_cast<std::size_t>(sums[k]); };  // exact below 2^53
@@ -152,7 +156,8 @@ inline RemapStats over_ranks(RemapStats s, const RankPart& part) {
   s.dropped_cells = count(3);
   s.first_order_cells = count(4);
   s.limited_cells = count(5);
-  for (std::size_t l = 0; l < s.per_level.size(); ++l) s.per_level[l] = count(6 + l);
+  s.summed_cells = count(6);
+  for (std::size_t l = 0; l < s.per_level.size(); ++l) s.per_level[l] = count(7 + l);
   s.max_volume_mismatch = part.max(s.max_volume_mismatch);
   s.capped_blocks = static_cast<std::size_t>(part.max(static_cast<double>(s.capped_blocks)));
   s.requested_level = static_cast<int>(part.max(s.requested_level));

@@ -27,8 +27,8 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   const auto fine = ml.finest();
   detail::check_remap_input(p, fine, params, part);
   detail::check_whole_blocks(box, ml);
-  const auto grid =
-      detail::candidate_grid(p, box, fine, params, (std::int64_t{1} << ml.max_level) * ml.block_cells, part);
+  const auto grids = detail::level_grids(p, box, ml, params, part);
+  const auto& grid = grids.local;
   auto sums_on = [&](const detail::CellGrid<D>& g, RemapStats& stats) -> detail::Sums<D>& {
     auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false,
                                               part.cells);
@@ -46,7 +46,7 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
     }
     return ws.sums[0];
   };
-  auto stats = detail::remap_onto_levels(p, box, ml, builder, params, region, ws, grid, sums_on, at_faces, part);
+  auto stats = detail::remap_onto_levels(p, box, ml, builder, params, region, ws, grids, sums_on, at_faces, part);
   if (part.on_ranks()) stats.first_order_cells = second_order::first_order_among(w2, part.own);
   return stats;
 }
