@@ -11,6 +11,7 @@
 #include "rsph/boundary/ghosts.hpp"
 #include "rsph/core/diagnostics.hpp"
 #include "rsph/core/exact_sum.hpp"
+#include "rsph/core/keepers.hpp"
 #include "rsph/core/parallel.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/mpi/comm.hpp"
@@ -23,7 +24,6 @@
 #include <cstdint>
 #include <cstring>
 #include <limits>
-#include <map>
 #include <memory>
 #include <numeric>
 #include <span>
@@ -544,43 +544,28 @@ class Decomposition {
 
   /// A reduction keyed by name: `rows` holds rows of a name (a whole number below 2^53, each at most once on a
   /// rank) and w values. Each name's keeper, the rank name mod P, adds the rows every rank sent for it (`add`), or
-  /// takes their largest values, in rank order from zero, and sends the result back to each of those ranks, which
-  /// finds it in place of its row's values. Two exchanges with the ranks that share a name, where gathering every
-  /// rank's rows on every rank took P messages each way; the sums are made in the same order.
+  /// takes their largest values, its own first and then the others' in rank order (complete_at_keepers), and each
+  /// rank finds the result in place of its row's values. Two exchanges with the ranks that share a name, where
+  /// gathering every rank's rows on every rank took P messages each way.
   void combine_by_name(std::vector<double>& rows, std::size_t w, bool add) const {
-    if (ranks() == 1) {  // its own rows: the same sums and largest values from zero
-      for (std::size_t r = 0; r < rows.size(); r += 1 + w)
-        for (std::size_t k = r + 1; k <= r + w; ++k) rows[k] = add ? 0.0 + rows[k] : std::max(0.0, rows[k]);
-      return;
-    }
+    if (ranks() == 1) return;  // its own rows: already complete
     const auto P = static_cast<std::size_t>(ranks());
-    std::vector<std::vector<double>> out(P);
-    std::vector<std::vector<std::size_t>> sent(P);  // per keeper: the rows sent there, in order
+    std::vector<std::size_t> names;
+    std::vector<int> keepers;
+    std::vector<double> values;
     for (std::size_t r = 0; r < rows.size(); r += 1 + w) {
-      const auto q = static_cast<std::size_t>(rows[r]) % P;
-      out[q].insert(out[q].end(), rows.begin() + std::ptrdiff_t(r), rows.begin() + std::ptrdiff_t(r + 1 + w));
-      sent[q].push_back(r);
+      names.push_back(static_cast<std::size_t>(rows[r]));
+      keepers.push_back(static_cast<int>(names.back() % P));
+      values.insert(values.end(), rows.begin() + std::ptrdiff_t(r + 1), rows.begin() + std::ptrdiff_t(r + 1 + w));
     }
-    std::vector<int> counts;
-    const auto in = exchange(out, &counts);
-    std::map<double, std::vector<double>> kept;  // the names kept here: their combined values
-    for (std::size_t r = 0; r < in.size(); r += 1 + w) {
-      auto& v = kept.try_emplace(in[r], w, 0.0).first->second;
-      for (std::size_t k = 0; k < w; ++k) v[k] = add ? v[k] + in[r + 1 + k] : std::max(v[k], in[r + 1 + k]);
-    }
-    std::vector<std::vector<double>> answer(P);
-    for (std::size_t q = 0, r = 0; q < P; ++q)
-      for (int k = 0; k < counts[q]; k += int(1 + w), r += 1 + w) {
-        const auto& v = kept.at(in[r]);
-        answer[q].insert(answer[q].end(), v.begin(), v.end());
-      }
-    const auto back = exchange(answer);
-    std::size_t at = 0;  // the answers in rank order, each keeper's in the order its rows were sent
-    for (std::size_t q = 0; q < P; ++q)
-      for (const std::size_t r : sent[q]) {
-        std::copy_n(back.begin() + std::ptrdiff_t(at), w, rows.begin() + std::ptrdiff_t(r + 1));
-        at += w;
-      }
+    complete_at_keepers(
+        std::span<const std::size_t>(names), std::span<const int>(keepers), values, w, comm_->rank(), ranks(),
+        [this](const std::vector<std::vector<double>>& out, std::vector<int>* counts) { return exchange(out, counts); },
+        [w, add](double* into, const double* part) {
+          for (std::size_t k = 0; k < w; ++k) into[k] = add ? into[k] + part[k] : std::max(into[k], part[k]);
+        });
+    for (std::size_t i = 0; i < names.size(); ++i)
+      std::copy_n(values.begin() + std::ptrdiff_t(i * w), w, rows.begin() + std::ptrdiff_t(i * (1 + w) + 1));
   }
 
   /// Element-wise least (`least`) or largest values over the ranks, in one reduction: exact in any order.

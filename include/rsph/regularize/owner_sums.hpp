@@ -8,6 +8,7 @@
 // new cells as the ranks name them (GridCells for a lattice fixed by the box, the sites themselves for a
 // per-site lattice, SitesOnRanks) give their sites, indices and neighbours.
 #include "rsph/core/errors.hpp"
+#include "rsph/core/keepers.hpp"
 #include "rsph/core/particle_set.hpp"
 #include "rsph/regularize/cell_grid.hpp"
 #include "rsph/regularize/remap_params.hpp"
@@ -18,6 +19,7 @@
 #include <cstdint>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace rsph::regularize::detail {
@@ -234,72 +236,16 @@ Sums<D> complete_on_owners(const Sums<D>& S, const Cells& cells, const RankPart&
   return kept;
 }
 
-/// The cells kept here that only other ranks touched, after complete_at_keepers: their flat indices and values.
-struct KeptElsewhereTouched {
-  std::vector<std::size_t> flat;
-  std::vector<double> values;
-};
+using rsph::KeptElsewhereTouched;
 
-/// Values of the new cells a rank's gas touched (cell i: flat index flat[i] on the grid of the whole set, keeper
-/// owner[i], numbers values[i w, (i + 1) w)) made complete over the ranks: each cell's keeper combines every rank's
-/// part into its own, its own first and then the others' in rank order (`combine(into, part)`, w numbers each),
-/// and sends the result back to every rank that sent a part, which takes it in place of its own. Every rank that
-/// touched a cell then holds the same numbers for it. Two exchanges. Returns the cells kept here that only others
-/// touched, with their complete values.
+/// complete_at_keepers (core/keepers.hpp) over the ranks of a remap: cell i, flat index flat[i] on the grid of the
+/// whole set, is kept by owner[i].
 template <class Combine>
 KeptElsewhereTouched complete_at_keepers(std::span<const std::size_t> flat, std::span<const int> owner,
                                          std::vector<double>& values, std::size_t w, const RankPart& part,
                                          Combine&& combine) {
-  const auto P = static_cast<std::size_t>(part.ranks);
-  SlotMap mine;  // the cells kept here that this rank touched: flat -> i
-  std::vector<std::vector<double>> out(P);
-  std::vector<std::vector<std::uint32_t>> sent(P);  // per keeper: the cells whose parts went there, in order
-  for (std::size_t i = 0; i < flat.size(); ++i) {
-    const auto q = static_cast<std::size_t>(owner[i]);
-    if (owner[i] == part.rank) {
-      mine.find_or_insert(flat[i], static_cast<std::uint32_t>(i));
-      continue;
-    }
-    out[q].push_back(static_cast<double>(flat[i]));
-    out[q].insert(out[q].end(), values.begin() + static_cast<std::ptrdiff_t>(i * w),
-                  values.begin() + static_cast<std::ptrdiff_t>((i + 1) * w));
-    sent[q].push_back(static_cast<std::uint32_t>(i));
-  }
-  std::vector<int> counts;
-  const auto in = part.exchange(out, &counts);
-  KeptElsewhereTouched extra;
-  SlotMap extra_slot;
-  auto complete_of = [&](std::size_t f) -> double* {
-    if (const std::int64_t i = mine.find(f); i >= 0) return values.data() + static_cast<std::size_t>(i) * w;
-    return extra.values.data() + static_cast<std::size_t>(extra_slot.find(f)) * w;
-  };
-  for (std::size_t r = 0; r < in.size(); r += 1 + w) {
-    const auto f = static_cast<std::size_t>(in[r]);
-    if (mine.find(f) < 0 && extra_slot.find(f) < 0) {  // the first part of a cell this rank did not touch
-      extra_slot.find_or_insert(f, std::uint32_t(extra.flat.size()));
-      extra.flat.push_back(f);
-      extra.values.insert(extra.values.end(), in.begin() + static_cast<std::ptrdiff_t>(r + 1),
-                          in.begin() + static_cast<std::ptrdiff_t>(r + 1 + w));
-      continue;
-    }
-    combine(complete_of(f), &in[r + 1]);
-  }
-  std::vector<std::vector<double>> answer(P);
-  std::size_t r = 0;
-  for (std::size_t q = 0; q < counts.size(); ++q)
-    for (std::size_t k = 0; k < static_cast<std::size_t>(counts[q]); k += 1 + w, r += 1 + w) {
-      const double* c = complete_of(static_cast<std::size_t>(in[r]));
-      answer[q].insert(answer[q].end(), c, c + w);
-    }
-  const auto back = part.exchange(answer, nullptr);
-  std::size_t at = 0;  // the answers come in rank order, each keeper's in the order its cells were sent
-  for (std::size_t q = 0; q < P; ++q)
-    for (const std::uint32_t i : sent[q]) {
-      std::copy_n(back.begin() + static_cast<std::ptrdiff_t>(at), w, values.begin() + std::ptrdiff_t(i * w));
-      at += w;
-    }
-  require(at == back.size(), "regularization: a keeper answered for other cells than it was sent");
-  return extra;
+  return rsph::complete_at_keepers(flat, owner, values, w, part.rank, part.ranks, part.exchange,
+                                   std::forward<Combine>(combine));
 }
 
 }  // namespace rsph::regularize::detail

@@ -152,8 +152,8 @@ class ByOwners {
       touched.at(flat_[i]);  // entry i, for the keepers of the cells near the kept ones
       if (owner_[i] == part_->rank) kept.at(flat_[i]) = S.cell[entry_[i]];
     }
-    for (std::size_t e = 0; e < extra_.flat.size(); ++e)
-      kept.at(extra_.flat[e]) = detail::read_sums<D>(&extra_.values[e * width_]);
+    for (std::size_t e = 0; e < extra_.name.size(); ++e)
+      kept.at(extra_.name[e]) = detail::read_sums<D>(&extra_.values[e * width_]);
     detail::add_window_in_lattice_order(kept, touched, owner_, cells_, *part_, elsewhere);
     return kept;
   }
