@@ -193,6 +193,29 @@ class Comm {
     return recv;
   }
 
+  /// The same `mine` to each rank of `partners` (ascending), and theirs back, where every partner sends as many
+  /// values and names this rank among its partners, so that no reduction need say what will come: one message
+  /// each way a partner. Returns the partners' values in their order. Its own tag keeps it apart from `exchange`.
+  template <class T>
+  std::vector<T> trade(std::span<const int> partners, std::span<const T> mine) const {
+    const Timer t(seconds_);
+    constexpr int tag = 4243;
+    const std::size_t n = mine.size();
+    require(n <= std::size_t(std::numeric_limits<int>::max()), "MPI trade: a message too long");
+    std::vector<T> in(partners.size() * n);
+    std::vector<MPI_Request> requests(2 * partners.size());
+    for (std::size_t i = 0; i < partners.size(); ++i) {
+      check(MPI_Irecv(in.data() + i * n, static_cast<int>(n), datatype<T>(), partners[i], tag, c_, &requests[2 * i]),
+            "MPI_Irecv");
+      check(MPI_Isend(mine.data(), static_cast<int>(n), datatype<T>(), partners[i], tag, c_, &requests[2 * i + 1]),
+            "MPI_Isend");
+    }
+    check(MPI_Waitall(static_cast<int>(requests.size()), requests.data(), MPI_STATUSES_IGNORE), "MPI_Waitall");
+    ++exchanges_;
+    messages_ += partners.size();
+    return in;
+  }
+
   /// Rank `root`'s text, on every rank.
   std::string broadcast(std::string text, int root = 0) const {
     const Timer t(seconds_);

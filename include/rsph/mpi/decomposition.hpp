@@ -169,9 +169,14 @@ struct DecompositionParams {
   double owner_reach_in_h = 4.0;
   /// A rank describes its particles to the others for their halos by 2^halo_piece_levels boxes, its particles
   /// split that many times at the middle of their longest axis: a curved part (a piece of a disk's annulus) is
-  /// held by boxes that hug it, where one box round it holds much of the others' gas. Every rank receives
-  /// every rank's boxes at each halo build (4 D numbers a box). 0: one box a rank.
+  /// held by boxes that hug it, where one box round it holds much of the others' gas. 0: one box a rank.
   int halo_piece_levels = 3;
+  /// Up to this many ranks every rank receives every rank's boxes at each halo build (one all-gather, 4 D numbers
+  /// a box); beyond, it receives every rank's one box round its boxes, and the boxes themselves only from the
+  /// ranks whose box meets its own (Comm::trade): P boxes and a message to and from each such rank, where P
+  /// 2^halo_piece_levels boxes grow past what the messages cost (3.1 MB a step at 4096 ranks in 3D,
+  /// docs/performance.md).
+  int boxes_to_all_up_to = 1024;
   void validate() const {
     partition.validate();
     require(rebalance_above >= 1.0, "the decomposition's rebalance threshold must be at least 1");
@@ -180,6 +185,7 @@ struct DecompositionParams {
     require(owner_reach_in_h > 0.0, "the decomposition's first reach of the remap by owners must be positive");
     require(halo_piece_levels >= 0 && halo_piece_levels <= 10,
             "the decomposition's halo pieces must be split 0 to 10 times");
+    require(boxes_to_all_up_to >= 1, "the decomposition's boxes_to_all_up_to must be at least 1");
   }
 };
 
@@ -247,6 +253,15 @@ bool may_meet(const Vec<D>& lo1, const Vec<D>& hi1, const Vec<D>& lo2, const Vec
   return true;
 }
 
+/// Whether two halo boxes (4 D numbers each: lo, hi of the particles, lo, hi of their reaches) may trade: the
+/// particles of either reach the other's, or lie in its reach. Symmetric.
+template <int D>
+bool boxes_meet(const double* m, const double* o, const Box<D>& box) {
+  using Map = Eigen::Map<const Vec<D>>;
+  return may_meet<D>(Map(m), Map(m + D), Map(o + 2 * D), Map(o + 3 * D), box) ||
+         may_meet<D>(Map(m + 2 * D), Map(m + 3 * D), Map(o), Map(o + D), box);
+}
+
 namespace detail {
 /// A set of particles split into pieces: 4 D numbers a piece (lo, hi of its particles, lo, hi of their reaches
 /// x -+ reach(a); a piece with none: lo = inf, hi = -inf), and the piece of each particle.
@@ -254,6 +269,18 @@ struct Pieces {
   std::vector<double> bounds;
   std::vector<std::uint32_t> piece;
 };
+
+/// One box round the boxes `bounds` (4 D numbers each: lo, hi of the particles, lo, hi of their reaches).
+template <int D>
+std::vector<double> hull_of(const std::vector<double>& bounds) {
+  constexpr double inf = std::numeric_limits<double>::infinity();
+  std::vector<double> hull(4 * D);
+  for (int k = 0; k < D; ++k) hull[k] = hull[2 * D + k] = inf, hull[D + k] = hull[3 * D + k] = -inf;
+  for (std::size_t b = 0; b < bounds.size(); b += 4 * D)
+    for (std::size_t k = 0; k < 4 * D; ++k)
+      hull[k] = (k / D) % 2 == 0 ? std::min(hull[k], bounds[b + k]) : std::max(hull[k], bounds[b + k]);
+  return hull;
+}
 
 /// The particles x[0, n) split `levels` times at the middle of their bounds' longest axis, into 2^levels pieces
 /// (some empty where a piece's particles all sit at one point, or fewer particles than pieces are left), the
@@ -624,6 +651,38 @@ class Decomposition {
   template <bool E>
   std::vector<double> receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width, double h_max);
 
+  /// The other ranks whose boxes (`mine`: this rank's, 4 D numbers each) a rank tests its particles against, and
+  /// their boxes, as many each as this rank's: every rank up to DecompositionParams::boxes_to_all_up_to ranks
+  /// (one all-gather; `all` holds every rank's boxes); beyond, where a rank has more than one box, those whose box
+  /// round their boxes meets this rank's (an all-gather of those, in `all`, and Comm::trade).
+  struct OthersBoxes {
+    std::vector<double> all;    ///< every rank's boxes, or every rank's one box round them
+    std::vector<int> rank;      ///< the other ranks, ascending
+    std::vector<double> boxes;  ///< rank[i]'s boxes, after one another
+  };
+  OthersBoxes boxes_of_others(const std::vector<double>& mine, const Box<D>& box) const {
+    constexpr std::size_t B = 4 * D;
+    const std::size_t per_rank = mine.size();
+    const int me = comm_->rank();
+    OthersBoxes o;
+    if (per_rank > B && ranks() > params_.boxes_to_all_up_to) {
+      const auto hull = detail::hull_of<D>(mine);
+      o.all = comm_->all_gather(std::span<const double>(hull));
+      for (int q = 0; q < ranks(); ++q)
+        if (q != me && boxes_meet<D>(hull.data(), &o.all[B * static_cast<std::size_t>(q)], box)) o.rank.push_back(q);
+      o.boxes = comm_->trade(std::span<const int>(o.rank), std::span<const double>(mine));
+      return o;
+    }
+    o.all = comm_->all_gather(std::span<const double>(mine));
+    for (int q = 0; q < ranks(); ++q)
+      if (q != me) {
+        o.rank.push_back(q);
+        const auto first = o.all.begin() + static_cast<std::ptrdiff_t>(per_rank * static_cast<std::size_t>(q));
+        o.boxes.insert(o.boxes.end(), first, first + static_cast<std::ptrdiff_t>(per_rank));
+      }
+    return o;
+  }
+
   /// Where the local set holds every particle, after gathering the others' within `width` of this rank's own:
   /// the own particles' bounds widened by it, unbounded on an axis where they pass every rank's particles' bounds
   /// or a periodic box's length. `bounds`: every rank's, as receive_halos returns them.
@@ -715,35 +774,33 @@ template <bool E>
 std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const Box<D>& box, double width,
                                                     double h_max) {
   // A pair interacts within support max(h_a, h_b) (times the search margin), so particle a reaches
-  // R_a = width h_a / h_max: each rank's boxes, of its particles and of their reaches, go to every rank; a
-  // particle goes to a rank one of whose reaches holds it or one of whose boxes it reaches. Without h_max, R =
+  // R_a = width h_a / h_max: each rank's boxes, of its particles and of their reaches, go to every rank that may
+  // need them (boxes_of_others); a particle goes to a rank one of whose reaches holds it or one of whose boxes it
+  // reaches. Without h_max, R =
   // width, and a rank is one box (Gathered: the local set then holds every particle within width of its bounds).
   const auto reach = [&](std::size_t a) { return h_max > 0.0 ? width * p.h[a] / h_max : width; };
   const int levels = h_max > 0.0 ? params_.halo_piece_levels : 0;
   const auto pieces = detail::split_into_pieces<D>(p.x, p.n_real, reach, levels);
   const auto& mine = pieces.bounds;
-  const auto all = comm_->all_gather(std::span<const double>(mine));
   const std::size_t per_rank = mine.size();
   constexpr std::size_t B = 4 * D;  // numbers a box
   using Map = Eigen::Map<const Vec<D>>;
-  const int me = comm_->rank();
-  halo_send_.assign(static_cast<std::size_t>(ranks()), {});
+  const auto others = boxes_of_others(mine, box);
   const std::size_t K = per_rank / B;
+  halo_send_.assign(static_cast<std::size_t>(ranks()), {});
   std::vector<const double*> near;  // of each of this rank's pieces, rank q's boxes near it
   std::vector<std::size_t> near_first(K + 1);
-  for (int q = 0; q < ranks(); ++q) {
-    if (q == me) continue;
+  for (std::size_t o = 0; o < others.rank.size(); ++o) {
+    const int q = others.rank[o];
+    const double* theirs = &others.boxes[per_rank * o];
     // the boxes first, so that a rank looks at its particles only for the ranks and boxes near them: O(P K^2 + k
     // n), not O(P n)
     near.clear();
     for (std::size_t l = 0; l < K; ++l) {
       const double* m = &mine[l * B];
       near_first[l] = near.size();
-      for (std::size_t i = per_rank * static_cast<std::size_t>(q); i < per_rank * static_cast<std::size_t>(q + 1);
-           i += B)
-        if (may_meet<D>(Map(m), Map(m + D), Map(&all[i + 2 * D]), Map(&all[i + 3 * D]), box) ||
-            may_meet<D>(Map(m + 2 * D), Map(m + 3 * D), Map(&all[i]), Map(&all[i + D]), box))
-          near.push_back(&all[i]);
+      for (std::size_t i = 0; i < per_rank; i += B)
+        if (boxes_meet<D>(m, theirs + i, box)) near.push_back(theirs + i);
     }
     near_first[K] = near.size();
     if (near.empty()) continue;
@@ -773,7 +830,7 @@ std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const 
   p.dv_dt.resize(p.x.size(), Vec<D>::Zero());
   if constexpr (E) p.du_dt.resize(p.x.size(), 0.0);
   for (std::size_t g = 0; g < halo_count_; ++g) p.ghost_source.push_back(std::uint32_t(halo_first_ + g));
-  return all;
+  return others.all;
 }
 
 template <int D>
