@@ -656,9 +656,13 @@ class Decomposition {
   /// (one all-gather; `all` holds every rank's boxes); beyond, where a rank has more than one box, those whose box
   /// round their boxes meets this rank's (an all-gather of those, in `all`, and Comm::trade).
   struct OthersBoxes {
-    std::vector<double> all;    ///< every rank's boxes, or every rank's one box round them
-    std::vector<int> rank;      ///< the other ranks, ascending
-    std::vector<double> boxes;  ///< rank[i]'s boxes, after one another
+    std::vector<double> all;     ///< every rank's boxes, or every rank's one box round them
+    std::vector<int> rank;       ///< the other ranks, ascending
+    std::vector<double> traded;  ///< the traded ranks' boxes, after one another (empty where all holds them)
+    /// rank[i]'s first box
+    const double* boxes(std::size_t i, std::size_t per_rank) const {
+      return traded.empty() ? &all[per_rank * static_cast<std::size_t>(rank[i])] : &traded[per_rank * i];
+    }
   };
   OthersBoxes boxes_of_others(const std::vector<double>& mine, const Box<D>& box) const {
     constexpr std::size_t B = 4 * D;
@@ -670,16 +674,12 @@ class Decomposition {
       o.all = comm_->all_gather(std::span<const double>(hull));
       for (int q = 0; q < ranks(); ++q)
         if (q != me && boxes_meet<D>(hull.data(), &o.all[B * static_cast<std::size_t>(q)], box)) o.rank.push_back(q);
-      o.boxes = comm_->trade(std::span<const int>(o.rank), std::span<const double>(mine));
+      o.traded = comm_->trade(std::span<const int>(o.rank), std::span<const double>(mine));
       return o;
     }
     o.all = comm_->all_gather(std::span<const double>(mine));
     for (int q = 0; q < ranks(); ++q)
-      if (q != me) {
-        o.rank.push_back(q);
-        const auto first = o.all.begin() + static_cast<std::ptrdiff_t>(per_rank * static_cast<std::size_t>(q));
-        o.boxes.insert(o.boxes.end(), first, first + static_cast<std::ptrdiff_t>(per_rank));
-      }
+      if (q != me) o.rank.push_back(q);
     return o;
   }
 
@@ -776,8 +776,8 @@ std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const 
   // A pair interacts within support max(h_a, h_b) (times the search margin), so particle a reaches
   // R_a = width h_a / h_max: each rank's boxes, of its particles and of their reaches, go to every rank that may
   // need them (boxes_of_others); a particle goes to a rank one of whose reaches holds it or one of whose boxes it
-  // reaches. Without h_max, R =
-  // width, and a rank is one box (Gathered: the local set then holds every particle within width of its bounds).
+  // reaches. Without h_max, R = width, and a rank is one box (Gathered: the local set then holds every particle
+  // within width of its bounds).
   const auto reach = [&](std::size_t a) { return h_max > 0.0 ? width * p.h[a] / h_max : width; };
   const int levels = h_max > 0.0 ? params_.halo_piece_levels : 0;
   const auto pieces = detail::split_into_pieces<D>(p.x, p.n_real, reach, levels);
@@ -792,7 +792,7 @@ std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const 
   std::vector<std::size_t> near_first(K + 1);
   for (std::size_t o = 0; o < others.rank.size(); ++o) {
     const int q = others.rank[o];
-    const double* theirs = &others.boxes[per_rank * o];
+    const double* theirs = others.boxes(o, per_rank);
     // the boxes first, so that a rank looks at its particles only for the ranks and boxes near them: O(P K^2 + k
     // n), not O(P n)
     near.clear();
