@@ -467,6 +467,54 @@ TEST_CASE("Decomposition: a rank's pieces hold its particles, and on a disk send
   if (world().size() > 1) CHECK(halos[1] < 0.8 * halos[0]);
 }
 
+TEST_CASE(
+    "Decomposition: on periodic axes the halo boxes meet by their nearest images, so that past the all-gather a "
+    "rank on a periodic strip trades with its two neighbours only",
+    "[mpi]") {
+  Box<2> box;
+  box.lo = Vec<2>(0.0, 0.0);
+  box.hi = Vec<2>(8.0, 1.0);
+  box.edge = {Edge::periodic, Edge::periodic};
+  using V = Vec<2>;
+  // intervals on the periodic x axis: across the face, an image touching, and apart
+  CHECK(mpi::may_meet<2>(V(7.9, 0.2), V(8.05, 0.3), V(0.02, 0.2), V(0.1, 0.3), box));
+  CHECK(mpi::may_meet<2>(V(-0.1, 0.2), V(0.02, 0.3), V(7.9, 0.2), V(7.95, 0.3), box));
+  CHECK(mpi::may_meet<2>(V(1.0, 0.2), V(2.0, 0.3), V(10.0, 0.2), V(11.0, 0.3), box));  // two periods on
+  CHECK_FALSE(mpi::may_meet<2>(V(1.0, 0.2), V(2.0, 0.3), V(3.0, 0.2), V(4.0, 0.3), box));
+  CHECK_FALSE(mpi::may_meet<2>(V(1.0, 0.2), V(2.0, 0.3), V(10.5, 0.2), V(11.0, 0.3), box));
+  CHECK(mpi::may_meet<2>(V(0.0, 0.2), V(5.0, 0.3), V(6.0, 0.2), V(9.5, 0.3), box));        // 8.5 long together
+  CHECK_FALSE(mpi::may_meet<2>(V(1.0, 0.2), V(0.0, 0.3), V(0.0, 0.0), V(8.0, 1.0), box));  // an empty one
+
+  // a strip of 3200 particles split by RCB along x; both ways of sending the boxes give the serial neighbours
+  ParticleSet<2, false> all;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  for (int i = 0; i < 3200; ++i) all.add(1.0, V(8.0 * u(rng), u(rng)), V(u(rng), u(rng)), 0.03);
+  const double width = 0.06;
+  auto serial = all;
+  boundary::make_ghosts(serial, box, width);
+  std::uint64_t halos[2]{}, partners[2]{};
+  for (int run : {0, 1}) {
+    mpi::DecompositionParams params;
+    params.partition.method = "RCB";
+    params.halo_piece_levels = 3;
+    if (run == 1) params.boxes_to_all_up_to = 1;
+    mpi::Decomposition<2> d(MPI_COMM_WORLD, params);
+    auto p = all;
+    d.distribute(p);
+    d.balance(p, {});
+    d.make_ghosts(p, box, width);
+    INFO("boxes to all up to " << params.boxes_to_all_up_to << " ranks");
+    CHECK(neighbour_mismatches(p, serial, width) == 0);
+    halos[run] = world().sum(d.counts().halo_points);
+    partners[run] = world().sum(d.counts().halo_partners);
+  }
+  const auto P = static_cast<std::uint64_t>(world().size());
+  CHECK(halos[1] == halos[0]);
+  CHECK(partners[0] == P * (P - 1));                            // the all-gather tests every other rank
+  CHECK(partners[1] == P * std::min<std::uint64_t>(2, P - 1));  // the trade: the left and right neighbours
+}
+
 namespace {
 
 template <int D>

@@ -197,6 +197,10 @@ struct ExchangeCounts {
   std::uint64_t bytes_sent = 0;         ///< since the start: halos, their refreshes, migrations
   std::uint64_t migrated = 0;           ///< particles sent to another rank since the start
   std::uint64_t partitions = 0;         ///< partitions computed
+  /// other ranks whose boxes this rank's particles were tested against at the last halo build (of the ghosts or
+  /// of a remap): every other rank up to DecompositionParams::boxes_to_all_up_to ranks, beyond those whose box
+  /// round their particles and reaches meets this rank's
+  std::uint64_t halo_partners = 0;
 };
 
 namespace detail {
@@ -244,12 +248,20 @@ void each_pair(A&& a, B&& b, F&& f) {
 }
 }  // namespace detail
 
-/// Can any point of [lo1, hi1] lie within [lo2, hi2]? No where their intervals miss on an axis that is not
-/// periodic (on a periodic one, an image may meet).
+/// Can any point of [lo1, hi1], or of one of its periodic images, lie within [lo2, hi2]? No where either is
+/// empty, or their intervals miss on an axis, on a periodic one for every image: the shifts s L with
+/// lo1 + s L <= hi2 and lo2 <= hi1 + s L hold no integer s (a slack of 1e-9 L keeps a touching image).
 template <int D>
 bool may_meet(const Vec<D>& lo1, const Vec<D>& hi1, const Vec<D>& lo2, const Vec<D>& hi2, const Box<D>& box) {
-  for (int k = 0; k < D; ++k)
-    if (!box.periodic(k) && (hi1[k] < lo2[k] || hi2[k] < lo1[k])) return false;
+  for (int k = 0; k < D; ++k) {
+    if (hi1[k] < lo1[k] || hi2[k] < lo2[k]) return false;
+    if (!box.periodic(k)) {
+      if (hi1[k] < lo2[k] || hi2[k] < lo1[k]) return false;
+      continue;
+    }
+    const double L = box.hi[k] - box.lo[k], slack = 1e-9;
+    if (std::floor((hi2[k] - lo1[k]) / L + slack) < std::ceil((lo2[k] - hi1[k]) / L - slack)) return false;
+  }
   return true;
 }
 
@@ -786,6 +798,7 @@ std::vector<double> Decomposition<D>::receive_halos(ParticleSet<D, E>& p, const 
   constexpr std::size_t B = 4 * D;  // numbers a box
   using Map = Eigen::Map<const Vec<D>>;
   const auto others = boxes_of_others(mine, box);
+  counts_.halo_partners = others.rank.size();
   const std::size_t K = per_rank / B;
   halo_send_.assign(static_cast<std::size_t>(ranks()), {});
   std::vector<const double*> near;  // of each of this rank's pieces, rank q's boxes near it
