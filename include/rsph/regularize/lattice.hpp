@@ -36,8 +36,9 @@ concept RegularLattice = requires(const L& l, const Box<D>& box, const Vec<D>& l
 
 /// The new cells of a lattice whose sites each own a cell of their own (2D), placed for one remap: how many,
 /// each site, its cell relative to a point (whether its bounding box meets a box, a bound on its diameter),
-/// the area a full cell holds (for the hand-on of nearly empty cells), the sites next to one, and the
-/// candidates whose cells may overlap a polygon.
+/// the area a full cell holds (for the hand-on of nearly empty cells), the sites next to one, the site whose
+/// cell most likely holds a point (the remap clips it first), and the candidates whose cells may overlap a
+/// polygon.
 template <class S>
 concept SiteCells = requires(const S& s, std::size_t c, const geometry::ConvexPolygon& polygon, const Vec<2>& x,
                              const geometry::Bounds& box) {
@@ -46,6 +47,7 @@ concept SiteCells = requires(const S& s, std::size_t c, const geometry::ConvexPo
   { s.cell(c, x) } -> std::same_as<geometry::ConvexPolygon>;
   { s.box_meets(c, x, box) } -> std::same_as<bool>;
   { s.diameter(c) } -> std::same_as<double>;
+  { s.nearest_site(x) } -> std::same_as<std::size_t>;
   { s.nominal_area(c) } -> std::same_as<double>;
   s.for_each_neighbour(c, [](std::size_t) {});
   s.for_each_candidate(polygon, x, [](std::size_t) {});

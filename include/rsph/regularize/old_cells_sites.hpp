@@ -18,19 +18,47 @@
 
 namespace rsph::regularize::detail {
 
-/// f(c, piece) for every piece of the old cell `cell` (relative to its particle at xo) in a new cell c of
-/// `sites` whose area exceeds `crumb`; the pieces are relative to xo.
+/// f(c, piece) for every piece of the old cell `cell` (relative to its particle at xo) in a new cell c of `sites`
+/// whose area exceeds `crumb` (at most a small fraction of the cell's), in the order of the sites' lookup; the
+/// pieces are relative to xo. The cell of the site nearest the particle is clipped first: once the pieces found
+/// leave less than half a crumb of the old cell, no other cell can hold a crumb, so the lookup stops (or, where
+/// that cell holds the whole old cell, as for gas on the circular orbits the rings follow, is not made). The
+/// pieces and their order are those of the whole lookup, to the bit.
 template <SiteCells Sites, class F>
 void for_each_site_piece(const Sites& sites, const geometry::ConvexPolygon& cell, const Vec<2>& xo, double crumb,
                          F&& f) {
+  const double cell_area = geometry::area(cell);
   const geometry::Bounds b = geometry::bounds(cell);
-  geometry::ConvexPolygon piece, scratch;
-  sites.for_each_candidate(cell, xo, [&](std::size_t c) {
-    if (!sites.box_meets(c, xo, b)) return;
+  geometry::ConvexPolygon piece, home_piece, scratch;
+  // the piece in cell c into `out`; false (out empty) where they share no more than a crumb
+  const auto piece_in = [&](std::size_t c, geometry::ConvexPolygon& out) {
+    out.clear();
+    if (!sites.box_meets(c, xo, b)) return false;
     const geometry::ConvexPolygon window = sites.cell(c, xo);
-    if (geometry::apart(cell, window, crumb / sites.diameter(c))) return;  // shares less than a crumb
-    geometry::clip_convex(cell, window, piece, scratch);
-    if (piece.n >= 3 && geometry::area(piece) > crumb) f(c, piece);
+    if (geometry::apart(cell, window, crumb / sites.diameter(c))) return false;
+    geometry::clip_convex(cell, window, out, scratch);
+    if (out.n >= 3 && geometry::area(out) > crumb) return true;
+    out.clear();
+    return false;
+  };
+  const std::size_t home = sites.nearest_site(xo);
+  const bool in_home = piece_in(home, home_piece);
+  double left = cell_area - (in_home ? geometry::area(home_piece) : 0.0);  // not yet found in a piece
+  if (left < 0.5 * crumb) {
+    if (in_home) f(home, home_piece);
+    return;
+  }
+  bool home_passed = false, done = false;
+  sites.for_each_candidate(cell, xo, [&](std::size_t c) {
+    if (done) return;
+    if (c == home) {
+      home_passed = true;
+      if (in_home) f(c, home_piece);
+    } else if (left >= 0.5 * crumb && piece_in(c, piece)) {
+      left -= geometry::area(piece);
+      f(c, piece);
+    }
+    done = home_passed && left < 0.5 * crumb;
   });
 }
 

@@ -109,6 +109,17 @@ struct RingSites {
     const auto j = static_cast<std::int64_t>(std::floor((phi - phase[k]) / step(k)));
     return ((j % n) + n) % n;
   }
+  /// The site nearest in angle to x on the ring nearest to |x| (clamped to the rings): the site whose cell most
+  /// likely holds x.
+  std::size_t nearest_site(const Vec<2>& x) const {
+    const std::size_t k = ring_nearest(x.norm());
+    return offset[k] + static_cast<std::size_t>(nearest(k, std::atan2(x.y(), x.x())));
+  }
+  /// The ring whose radius lies nearest to r (clamped to the rings).
+  std::size_t ring_nearest(double r) const {
+    const auto i = static_cast<std::int64_t>(std::floor((r - radius[0]) / spacing + 0.5));
+    return static_cast<std::size_t>(std::clamp<std::int64_t>(i, 0, static_cast<std::int64_t>(rings()) - 1));
+  }
   /// The area of the ring's band a cell stands for, 2 pi r_i Delta / N_i: what a full cell holds (the cells of
   /// the outermost and innermost rings reach beyond their band to take in any gas out there).
   double nominal_area(std::size_t c) const {
@@ -401,10 +412,7 @@ void RingSites::for_each_candidate(const geometry::ConvexPolygon& p, const Vec<2
   const double phi_o = std::atan2(towards.y(), towards.x());
   const double margin = 1e-9 * spacing;
   const auto n_rings = static_cast<std::int64_t>(rings());
-  auto ring_at = [&](double r) {
-    const auto i = static_cast<std::int64_t>(std::floor((r - radius[0]) / spacing + 0.5));
-    return std::clamp<std::int64_t>(i, 0, n_rings - 1);
-  };
+  const auto ring_at = [&](double r) { return static_cast<std::int64_t>(ring_nearest(r)); };
   for (std::int64_t ki = std::max<std::int64_t>(0, ring_at(e.r_lo) - 2);
        ki <= std::min(n_rings - 1, ring_at(e.r_hi) + 2); ++ki) {
     const auto k = static_cast<std::size_t>(ki);
