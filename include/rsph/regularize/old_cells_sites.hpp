@@ -30,22 +30,22 @@ void for_each_site_piece(const Sites& sites, const geometry::ConvexPolygon& cell
   const double cell_area = geometry::area(cell);
   const geometry::Bounds b = geometry::bounds(cell);
   geometry::ConvexPolygon piece, home_piece, scratch;
-  // the piece in cell c into `out`; false (out empty) where they share no more than a crumb
+  // the piece in cell c into `out`, and its area; 0 (out empty) where they share no more than a crumb
   const auto piece_in = [&](std::size_t c, geometry::ConvexPolygon& out) {
     out.clear();
-    if (!sites.box_meets(c, xo, b)) return false;
+    if (!sites.box_meets(c, xo, b)) return 0.0;
     const geometry::ConvexPolygon window = sites.cell(c, xo);
-    if (geometry::apart(cell, window, crumb / sites.diameter(c))) return false;
+    if (geometry::apart(cell, window, crumb / sites.diameter(c))) return 0.0;
     geometry::clip_convex(cell, window, out, scratch);
-    if (out.n >= 3 && geometry::area(out) > crumb) return true;
+    if (const double a = out.n >= 3 ? geometry::area(out) : 0.0; a > crumb) return a;
     out.clear();
-    return false;
+    return 0.0;
   };
   const std::size_t home = sites.nearest_site(xo);
-  const bool in_home = piece_in(home, home_piece);
-  double left = cell_area - (in_home ? geometry::area(home_piece) : 0.0);  // not yet found in a piece
+  const double home_area = piece_in(home, home_piece);
+  double left = cell_area - home_area;  // not yet found in a piece
   if (left < 0.5 * crumb) {
-    if (in_home) f(home, home_piece);
+    if (home_area > 0.0) f(home, home_piece);
     return;
   }
   bool home_passed = false, done = false;
@@ -53,10 +53,12 @@ void for_each_site_piece(const Sites& sites, const geometry::ConvexPolygon& cell
     if (done) return;
     if (c == home) {
       home_passed = true;
-      if (in_home) f(c, home_piece);
-    } else if (left >= 0.5 * crumb && piece_in(c, piece)) {
-      left -= geometry::area(piece);
-      f(c, piece);
+      if (home_area > 0.0) f(c, home_piece);
+    } else if (left >= 0.5 * crumb) {
+      if (const double a = piece_in(c, piece); a > 0.0) {
+        left -= a;
+        f(c, piece);
+      }
     }
     done = home_passed && left < 0.5 * crumb;
   });
