@@ -754,10 +754,25 @@ void compare_sod_on_levels(const char* order_name, bool fields = true, int n_lef
   step_both_past_remaps(alone, ranks, 5);
   INFO(D << "D, " << order_name << " remap on " << world().size() << " ranks");
   check_as_one_process<D>(alone, ranks, fields);
-  // every rank chose the levels one process chose, block by block
-  CHECK(ranks.regularizer().lattice().levels() == alone.regularizer().lattice().levels());
+  // every rank chose the levels one process chose, block by block, and keeps those near its part only: every block
+  // one process refined is kept by some rank
+  const auto& mine = ranks.regularizer().lattice().levels();
+  const auto& all = alone.regularizer().lattice().levels();
+  std::size_t differ = 0;
+  for (const auto& [block, level] : mine) differ += !all.contains(block) || all.at(block) != level;
+  CHECK(differ == 0);
+  std::vector<int> holders;  // per block one process refined, the ranks that keep it
+  for (const auto& [block, level] : all)
+    if (level > 0) holders.push_back(mine.contains(block));
+  world().sum_in_place(std::span<int>(holders));
+  CHECK(std::count(holders.begin(), holders.end(), 0) == 0);
+  if (world().size() > 1 && n_left >= 400) {  // on the long tube a rank keeps its share of the blocks and a margin
+    // (measured: at most 57, 45 and 35 of 100 blocks at 2, 3 and 4 ranks)
+    INFO("blocks kept here: " << mine.size() << " of " << all.size());
+    CHECK(world().max(double(mine.size())) <= (1.0 / world().size() + 0.15) * double(all.size()));
+  }
   std::set<int> levels_used;
-  for (const auto& [block, level] : alone.regularizer().lattice().levels()) levels_used.insert(level);
+  for (const auto& [block, level] : all) levels_used.insert(level);
   CHECK(levels_used.size() == 3);  // the test spans levels 0, 1 and 2
   // each rank sums on its part of the finest grid, not on the whole
   const auto part_cells = ranks.regularizer().log().back().stats.summed_cells;

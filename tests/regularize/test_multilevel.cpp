@@ -145,6 +145,72 @@ TEST_CASE("2:1 balance holds and a criterion beyond the finest level is capped",
   CHECK(stats.per_level[3] == 64);
 }
 
+TEST_CASE(
+    "levels chosen over a window L + 1 blocks round a part are the whole set's on the part and one block round it; "
+    "without the margin they are not",
+    "[regularize][multilevel]") {
+  constexpr int L = 3;
+  const lattice::MultiLevel<2, refine::TargetMass> ml(1.0, L, 2, refine::TargetMass{1.0, 0.25});
+  refine::BlockField<2> whole;
+  whole.origin = Vec<2>::Zero();
+  whole.spacing = 1.0;
+  whole.cells_per_block = 2;
+  whole.blocks = {24, 20};
+  const std::int64_t nx = 48, ny = 40;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  whole.volume.assign(static_cast<std::size_t>(nx * ny), 1.0);
+  whole.mass.resize(whole.volume.size());
+  for (auto& m : whole.mass)  // mostly levels 0-1, a few blocks asking for up to L + 1
+    m = u(rng) < 0.03 ? std::pow(4.0, 2.0 + L * u(rng)) : 0.5 + 2.0 * u(rng);
+  const std::map<std::array<std::int64_t, 2>, int> none;
+  regularize::RemapStats stats;
+  const auto all = [](const std::array<std::int64_t, 2>&) { return true; };
+  const auto levels = regularize::detail::choose_levels(ml, whole, {0, 0}, none, all, stats);
+  REQUIRE(stats.requested_level == L + 1);
+  // the levels over the window of part [a, b] (blocks), grown by `margin`, differ from the whole's on the part
+  // grown by one in this many blocks
+  auto differing = [&](std::array<std::int64_t, 2> a, std::array<std::int64_t, 2> b, std::int64_t margin) {
+    std::array<std::int64_t, 2> lo, hi;
+    for (std::size_t k = 0; k < 2; ++k) {
+      lo[k] = std::max<std::int64_t>(0, a[k] - margin);
+      hi[k] = std::min<std::int64_t>(whole.blocks[k] - 1, b[k] + margin);
+    }
+    refine::BlockField<2> window = whole;
+    window.blocks = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1};
+    window.first_block = lo;
+    const std::int64_t wx = 2 * window.blocks[0], wy = 2 * window.blocks[1];
+    window.mass.assign(static_cast<std::size_t>(wx * wy), 0.0);
+    window.volume = window.mass;
+    for (std::int64_t j = 0; j < wy; ++j)
+      for (std::int64_t i = 0; i < wx; ++i) {
+        const auto from = static_cast<std::size_t>((2 * lo[1] + j) * nx + 2 * lo[0] + i);
+        window.mass[static_cast<std::size_t>(j * wx + i)] = whole.mass[from];
+        window.volume[static_cast<std::size_t>(j * wx + i)] = whole.volume[from];
+      }
+    regularize::RemapStats s;
+    const auto mine = regularize::detail::choose_levels(ml, window, lo, none, all, s);
+    int differ = 0;
+    for (std::int64_t j = std::max<std::int64_t>(0, a[1] - 1); j <= std::min<std::int64_t>(19, b[1] + 1); ++j)
+      for (std::int64_t i = std::max<std::int64_t>(0, a[0] - 1); i <= std::min<std::int64_t>(23, b[0] + 1); ++i)
+        differ += mine[static_cast<std::size_t>((j - lo[1]) * window.blocks[0] + i - lo[0])] !=
+                  levels[static_cast<std::size_t>(j * 24 + i)];
+    return differ;
+  };
+  int without_margin = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    std::array<std::int64_t, 2> a{}, b{};
+    for (std::size_t k = 0; k < 2; ++k) {
+      const auto n = static_cast<double>(whole.blocks[k]);
+      a[k] = static_cast<std::int64_t>(u(rng) * n);
+      b[k] = std::min<std::int64_t>(whole.blocks[k] - 1, a[k] + static_cast<std::int64_t>(u(rng) * 6.0));
+    }
+    CHECK(differing(a, b, L + 1) == 0);
+    without_margin += differing(a, b, 1);
+  }
+  CHECK(without_margin > 0);  // the balance carries levels farther than a block
+}
+
 TEST_CASE("target-mass criterion: levels follow the density, with hysteresis", "[regularize][multilevel]") {
   // density 1 on the left half, 16 on the right: with the target mass equal to a level-0 particle of the
   // light gas, the dense half goes to level 2 (mass 16 / 16 per particle)

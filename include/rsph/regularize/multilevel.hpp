@@ -8,6 +8,7 @@
 #include "rsph/core/particle_set.hpp"
 #include "rsph/regularize/lattice.hpp"
 #include "rsph/regularize/level_faces.hpp"
+#include "rsph/regularize/level_windows.hpp"
 #include "rsph/regularize/multilevel_lattice.hpp"
 #include "rsph/regularize/refinement.hpp"
 #include "rsph/regularize/remap.hpp"
@@ -25,10 +26,6 @@
 namespace rsph::regularize {
 namespace detail {
 
-/// A block's (or a cell's) integer index per axis; not deduced from, so D comes from the other arguments.
-template <int D>
-using BlockIndex = std::type_identity_t<std::array<std::int64_t, static_cast<std::size_t>(D)>>;
-
 /// Every closed axis of the box must hold a whole number of blocks.
 template <int D, class Criterion>
 void check_whole_blocks(const Box<D>& box, const lattice::MultiLevel<D, Criterion>& ml) {
@@ -41,11 +38,11 @@ void check_whole_blocks(const Box<D>& box, const lattice::MultiLevel<D, Criterio
     }
 }
 
-/// The level-0 layout of the blocks of `whole` (mass and volume zero); block0 receives the absolute index of its
-/// first block.
+/// The level-0 layout of the blocks of `window`, a block-aligned part of the whole set's grid `whole` (mass and
+/// volume zero); block0 receives the absolute index of its first block.
 template <int D, class Criterion>
 refine::BlockField<D> level0_layout(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box,
-                                    const CellGrid<D>& whole, BlockIndex<D>& block0) {
+                                    const CellGrid<D>& whole, const CellGrid<D>& window, BlockIndex<D>& block0) {
   const std::int64_t ratio = std::int64_t{1} << ml.max_level;  // finest cells per level-0 cell and axis
   const std::int64_t align = ratio * ml.block_cells;           // finest cells per block and axis
   refine::BlockField<D> field;
@@ -53,20 +50,21 @@ refine::BlockField<D> level0_layout(const lattice::MultiLevel<D, Criterion>& ml,
   field.cells_per_block = ml.block_cells;
   std::size_t n_level0 = 1;
   for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
-    field.blocks[k] = whole.count[k] / align;
-    block0[k] = whole.range.lo[k] / align;  // aligned: exact
-    field.periods[k] = whole.periods[k] > 0 ? field.blocks[k] : 0;
+    field.blocks[k] = window.count[k] / align;
+    block0[k] = window.range.lo[k] / align;  // aligned: exact
+    field.first_block[k] = (window.range.lo[k] - whole.range.lo[k]) / align;
+    field.periods[k] = whole.periods[k] > 0 ? field.blocks[k] : 0;  // (a window spans a periodic axis whole)
     field.origin[static_cast<int>(k)] =
         box.lo[static_cast<int>(k)] + static_cast<double>(whole.range.lo[k]) * ml.finest().spacing;
-    n_level0 *= static_cast<std::size_t>(whole.count[k] / ratio);
+    n_level0 *= static_cast<std::size_t>(window.count[k] / ratio);
   }
   field.mass.assign(n_level0, 0.0);
   field.volume.assign(n_level0, 0.0);
   return field;
 }
 
-/// Adds to `field` (laid out on `whole`) the finest cells' mass and volume of `grid`, a block-aligned part of
-/// `whole` (`finest(f)` gives the pair of cell f), in the order of grid's cells.
+/// Adds to `field` (laid out on `whole`, a window) the finest cells' mass and volume of `grid`, a block-aligned part
+/// of `whole` (`finest(f)` gives the pair of cell f), in the order of grid's cells.
 template <int D, class Criterion, class Finest>
 void add_finest_cells(refine::BlockField<D>& field, const lattice::MultiLevel<D, Criterion>& ml,
                       const CellGrid<D>& whole, const CellGrid<D>& grid, Finest&& finest) {
@@ -86,17 +84,35 @@ void add_finest_cells(refine::BlockField<D>& field, const lattice::MultiLevel<D,
   }
 }
 
-/// The field the criteria read, over the blocks of the whole set's grid `whole`: from this process's sums on it,
-/// or on many ranks from each rank's sums on its part `grid`: a rank adds the finest cells whose site it owns (its
-/// overlaps there are complete) into its level-0 cells, and the ranks' level-0 cells are summed, so that every rank
-/// holds the same bits. What travels is one pair a level-0 cell, not one a finest cell.
+/// The grids of a multi-level remap: `whole`, the whole set's (alike on every rank), on which blocks are numbered;
+/// `local`, the block-aligned part of it that the old cells built here reach, on which this rank sums; `window`,
+/// local grown by max_level + 1 blocks, over which it lays out the level-0 field and chooses levels (the 2:1
+/// balance carries a level at most max_level blocks, so the blocks `kept`, local's grown by one, which the
+/// footprint and the h ramp read, get the levels one process gives them); and `kept`, whose levels it stores for
+/// the next remap. In one process all are the whole. A rank's memory then follows its particles, not the box; on
+/// periodic axes it spans the period. A rank that builds no cell sums on one block.
+template <int D>
+struct LevelGrids {
+  CellGrid<D> whole, local, window;
+  BlockRange<D> kept;
+};
+
+/// The field the criteria read, over the blocks of `grids.window`: from this process's sums on it, or on many ranks
+/// from each rank's sums on its part `grid`: a rank adds the finest cells whose site it owns (its overlaps there
+/// are complete) into its level-0 cells, and the ranks whose windows meet trade them (trade_level_inputs), so that
+/// every rank holds the same bits in a cell. What travels is one record a level-0 cell, not one a finest cell; with
+/// them the levels kept at the last remap travel into `previous`.
 template <int D, class Criterion, class Lattice>
 refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box, const Lattice& fine,
-                                   const CellGrid<D>& whole, const CellGrid<D>& grid, const Sums<D>& S,
-                                   const RankPart& part, BlockIndex<D>& block0) {
-  auto field = level0_layout(ml, box, whole, block0);
+                                   const LevelGrids<D>& grids, const Sums<D>& S, const RankPart& part,
+                                   const RankWindows<D>& all, BlockIndex<D>& block0,
+                                   std::map<BlockIndex<D>, int>& previous) {
+  const CellGrid<D>& grid = grids.local;
+  auto field = level0_layout(ml, box, grids.whole, grids.window, block0);
   if (!part.on_ranks()) {
-    add_finest_cells(field, ml, whole, grid, [&](std::size_t f) { return std::pair{S.cell[f].m, S.cell[f].volume}; });
+    add_finest_cells(field, ml, grids.window, grid, [&](std::size_t f) {
+      return std::pair{S.cell[f].m, S.cell[f].volume};
+    });
     return field;
   }
   std::vector<std::size_t> covered;  // the cells some old cell built here meets
@@ -110,35 +126,20 @@ refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, 
   const auto mine = part.owns(sites);
   std::vector<std::uint8_t> owned(grid.n_cells, 0);
   for (std::size_t i = 0; i < covered.size(); ++i) owned[covered[i]] = mine[i];
-  add_finest_cells(field, ml, whole, grid, [&](std::size_t f) {
+  add_finest_cells(field, ml, grids.window, grid, [&](std::size_t f) {
     return owned[f] ? std::pair{S.cell[f].m, S.cell[f].volume} : std::pair{0.0, 0.0};
   });
-  const std::size_t n = field.mass.size();
-  std::vector<double> mv(2 * n);
-  std::copy(field.mass.begin(), field.mass.end(), mv.begin());
-  std::copy(field.volume.begin(), field.volume.end(), mv.begin() + static_cast<std::ptrdiff_t>(n));
-  part.sum_over_ranks(mv);
-  std::copy_n(mv.begin(), n, field.mass.begin());
-  std::copy_n(mv.begin() + static_cast<std::ptrdiff_t>(n), n, field.volume.begin());
-  return field;
+  return trade_level_inputs(field, block0, ml.levels(), all, part, previous);
 }
-
-/// The grids of a multi-level remap: `whole`, the whole set's (alike on every rank), on which the blocks and their
-/// levels are laid out, and `local`, the block-aligned part of it that the old cells built here reach, on which this
-/// rank sums (the whole on one process). A rank's memory then follows its particles, not the box; on periodic axes
-/// it spans the period. A rank that builds no cell sums on one block.
-template <int D>
-struct LevelGrids {
-  CellGrid<D> whole, local;
-};
 
 template <int D, class Criterion, bool E>
 LevelGrids<D> level_grids(const ParticleSet<D, E>& p, const Box<D>& box, const lattice::MultiLevel<D, Criterion>& ml,
                           const RemapParams& params, const RankPart& part) {
   const auto fine = ml.finest();
   const std::int64_t align = (std::int64_t{1} << ml.max_level) * ml.block_cells;  // finest cells per block and axis
-  LevelGrids<D> g{candidate_grid(p, box, fine, params, align, part), {}};
-  g.local = g.whole;
+  LevelGrids<D> g{candidate_grid(p, box, fine, params, align, part), {}, {}, {}};
+  g.local = g.window = g.whole;
+  g.kept = blocks_of(g.whole, align);
   if (!part.on_ranks()) return g;
   Vec<D> lo = Vec<D>::Constant(std::numeric_limits<double>::max()), hi = -lo;
   double h_max = 0.0;
@@ -158,12 +159,17 @@ LevelGrids<D> level_grids(const ParticleSet<D, E>& p, const Box<D>& box, const l
     } else if (g.whole.periods[k] == 0) {
       r.lo[k] = std::max(g.whole.range.lo[k], floor_div(touched.lo[k], align) * align);
       r.hi[k] = std::min(g.whole.range.hi[k], (floor_div(touched.hi[k], align) + 1) * align - 1);
-      if (r.hi[k] < r.lo[k]) r.hi[k] = r.lo[k] + align - 1;  // (no cell reaches the whole grid: one block)
+      if (r.hi[k] < r.lo[k]) {  // (no cell reaches the whole grid: its first block)
+        r.lo[k] = g.whole.range.lo[k];
+        r.hi[k] = r.lo[k] + align - 1;
+      }
     }
     g.local.count[k] = r.hi[k] - r.lo[k] + 1;
     cells *= static_cast<double>(g.local.count[k]);
   }
   g.local.n_cells = static_cast<std::size_t>(cells);
+  g.window = grown_by_blocks(g.local, g.whole, ml.max_level + 1, align);
+  g.kept = blocks_of(grown_by_blocks(g.local, g.whole, 1, align), align);
   return g;
 }
 
@@ -175,35 +181,42 @@ BlockIndex<D> absolute_block(const refine::BlockField<D>& field, const BlockInde
   return bi;
 }
 
-/// Each block's level: the criterion's, capped at the finest level, then 2:1 balanced.
-template <int D, class Criterion>
+/// Each block's level: the criterion's (given the level `previous` holds for it), capped at the finest level, then
+/// 2:1 balanced. The blocks asked above the finest level are reported where `counted` (its absolute index).
+template <int D, class Criterion, class Counted>
 std::vector<int> choose_levels(const lattice::MultiLevel<D, Criterion>& ml, const refine::BlockField<D>& field,
-                               const BlockIndex<D>& block0, RemapStats& stats) {
+                               const BlockIndex<D>& block0, const std::map<BlockIndex<D>, int>& previous,
+                               Counted&& counted, RemapStats& stats) {
   std::vector<int> level(field.n_blocks(), 0);
   for (std::size_t b = 0; b < level.size(); ++b) {
-    const int want =
-        static_cast<int>(ml.criterion.level(field, b, ml.previous_level(absolute_block(field, block0, b))));
-    stats.requested_level = std::max(stats.requested_level, want);
-    if (want > ml.max_level) ++stats.capped_blocks;
+    const auto block = absolute_block(field, block0, b);
+    const auto before = previous.find(block);
+    const int want = static_cast<int>(
+        ml.criterion.level(field, b, before == previous.end() ? refine::no_previous_level : before->second));
+    if (counted(block)) {
+      stats.requested_level = std::max(stats.requested_level, want);
+      if (want > ml.max_level) ++stats.capped_blocks;
+    }
     level[b] = std::clamp(want, 0, ml.max_level);
   }
   balance_two_to_one(field, level);
   return level;
 }
 
-/// The new cells of the blocks that lie in `grid`, a block-aligned part of the whole set's grid `whole` (on which
-/// `field` and `level` are laid out), each block at its level, in block order.
+/// The new cells of the blocks that lie in `grid`, a block-aligned part of `window` (on which `field` and `level`
+/// are laid out), each block at its level, in block order; their sites are placed from the whole set's grid.
 template <int D>
-Footprint<D> footprint(const refine::BlockField<D>& field, const std::vector<int>& level, const CellGrid<D>& whole,
-                       const CellGrid<D>& grid, int max_level, std::int64_t align, double dx) {
+Footprint<D> footprint(const refine::BlockField<D>& field, const std::vector<int>& level, const LevelGrids<D>& grids,
+                       int max_level, std::int64_t align, double dx) {
+  const CellGrid<D>& grid = grids.local;
   Footprint<D> fp;
   fp.owner.resize(grid.n_cells);
   fp.dx = dx;
   fp.origin = field.origin;
-  std::array<std::int64_t, D> first{}, last{};  // the blocks of `grid`, in whole's blocks
+  std::array<std::int64_t, D> first{}, last{};  // the blocks of `grid`, in the window's blocks
   for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
-    fp.offset[k] = grid.range.lo[k] - whole.range.lo[k];
-    first[k] = fp.offset[k] / align;
+    fp.offset[k] = grid.range.lo[k] - grids.whole.range.lo[k];
+    first[k] = (grid.range.lo[k] - grids.window.range.lo[k]) / align;
     last[k] = first[k] + grid.count[k] / align;
   }
   for (std::size_t b = 0; b < level.size(); ++b) {
@@ -287,13 +300,14 @@ void flag_kept_elsewhere(const Footprint<D>& fp, const Sums<D>& cells, const Ran
 }
 
 /// The end of the multi-level remap: nearly empty cells handed on, one particle per kept cell with h ramped
-/// towards coarser blocks (on many ranks, per cell this rank keeps), and the blocks' levels stored for the next
-/// remap.
+/// towards coarser blocks (on many ranks, per cell this rank keeps), and the levels of the blocks `kept` stored for
+/// the next remap.
 template <int D, bool E, class Criterion, class Field, class Levels>
 void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml, const RemapParams& params,
-                    const CellGrid<D>& grid, const Footprint<D>& fp, const Field& field, const Levels& level,
-                    const BlockIndex<D>& block0, Sums<D>& cells, const std::vector<double>& cell_volume,
-                    RemapWorkspace<D>& ws, RemapStats& stats, const RankPart& part) {
+                    const CellGrid<D>& grid, const BlockRange<D>& kept, const Footprint<D>& fp, const Field& field,
+                    const Levels& level, const BlockIndex<D>& block0, Sums<D>& cells,
+                    const std::vector<double>& cell_volume, RemapWorkspace<D>& ws, RemapStats& stats,
+                    const RankPart& part) {
   auto& keep = ws.keep;
   flag_kept_elsewhere(fp, cells, part, ws.elsewhere);
   hand_on_sparse_cells<D>(
@@ -323,7 +337,10 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
   for (std::size_t c = 0; c < n_cells; ++c)
     if (keep[c] && cells.cell[c].m > 0.0) ++stats.per_level[static_cast<std::size_t>(fp.level[c])];
   std::map<std::array<std::int64_t, D>, int> levels;
-  for (std::size_t b = 0; b < level.size(); ++b) levels[absolute_block(field, block0, b)] = level[b];
+  for (std::size_t b = 0; b < level.size(); ++b) {
+    const auto block = absolute_block(field, block0, b);
+    if (kept.contains(block)) levels[block] = level[b];
+  }
   ml.store_levels(std::move(levels));
 }
 
@@ -332,9 +349,10 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
 /// takes the old cells that reach a face cell to first order, as the face cells' hand-out is). Then every
 /// block's level from the criterion (capped at the finest level, 2:1 balanced), one particle per kept cell,
 /// block by block and in lattice order within a block, with h = h_over_dx * Delta_l.
-/// `part`: on many ranks, the levels are every rank's alike, chosen from the whole set's field (one pair of numbers
-/// a level-0 cell summed over the ranks); each rank sums on its part of the finest grid, and the old cells built
-/// again at faces are among those built for the sums.
+/// `part`: on many ranks, each rank sums on its part of the finest grid and chooses the levels over a window
+/// around it from the level-0 field the ranks whose windows meet complete together (one record a level-0 cell),
+/// so that the blocks it needs get the levels one process gives them; the old cells built again at faces are
+/// among those built for the sums.
 template <int D, class Criterion, class Builder, bool E, class Region, class SumsOn, class AtFaces>
 RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                              Builder& builder, const RemapParams& params, const Region& region, RemapWorkspace<D>& ws,
@@ -347,9 +365,14 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
   const Sums<D>* S = &sums_on(grid, stats);
   stats.max_volume_mismatch = S->max_mismatch;
   std::array<std::int64_t, D> block0{};
-  const auto field = level0_field(ml, box, fine, grids.whole, grid, *S, part, block0);
-  const auto level = choose_levels(ml, field, block0, stats);
-  const auto fp = footprint(field, level, grids.whole, grid, ml.max_level, align, fine.spacing);
+  RankWindows<D> all;  // on many ranks, every rank's window and kept blocks
+  if (part.on_ranks()) all = gather_windows(blocks_of(grids.window, align), grids.kept, part);
+  std::map<std::array<std::int64_t, D>, int> traded;  // on many ranks, the previous levels of the window's blocks
+  const auto field = level0_field(ml, box, fine, grids, *S, part, all, block0, traded);
+  const auto level = choose_levels(
+      ml, field, block0, part.on_ranks() ? traded : ml.levels(),
+      [&](const BlockIndex<D>& b) { return !part.on_ranks() || counts_block_here(all, part.rank, b); }, stats);
+  const auto fp = footprint(field, level, grids, ml.max_level, align, fine.spacing);
   Faces faces;
   if (ml.max_level > 0) {
     faces = level_faces(grid, fp);
@@ -367,7 +390,7 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
     else
       remap_face_cells(p, box, fine, params, grid, fp, faces, cells, cell_volume);
   }
-  emit_on_levels(p, ml, params, grid, fp, field, level, block0, cells, cell_volume, ws, stats, part);
+  emit_on_levels(p, ml, params, grid, grids.kept, fp, field, level, block0, cells, cell_volume, ws, stats, part);
   return stats;
 }
 
@@ -375,8 +398,8 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
 
 /// Remaps `p` onto a multi-level lattice (detail::remap_onto_levels), each old cell handing out its mean by
 /// eqs. (6)-(9). Mass, momentum and total energy are conserved exactly as on a uniform lattice. `part`: on many
-/// ranks, the old cells built and the reductions; every rank lays out the whole set's blocks and levels, and sums on
-/// the part of the finest grid its old cells reach (level_grids).
+/// ranks, the old cells built and the reductions; every rank sums on the part of the finest grid its old cells reach
+/// and lays out blocks and levels over a window around it (level_grids).
 template <int D, class Criterion, class Builder, bool E, class Region = region::Unbounded>
 RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                               Builder& builder, const RemapParams& params, const Region& region = {},

@@ -28,8 +28,8 @@ struct MultiLevel {
   static_assert(refine::check_criterion<Criterion, D>());
   static constexpr int dim = D;
   static constexpr int deepest_supported = 10;
-  /// Runs on many ranks: every rank lays out the whole set's grid and chooses the same levels from the field
-  /// summed over them (multilevel.hpp).
+  /// Runs on many ranks: every rank chooses the levels of the blocks near its part from the field the ranks
+  /// complete together, as one process would, and keeps those alone (multilevel.hpp, level_windows.hpp).
   static constexpr bool remaps_on_ranks = true;
 
   double spacing;   ///< Delta_0, the coarsest level's spacing
@@ -56,7 +56,8 @@ struct MultiLevel {
   double spacing_at(int level) const { return spacing / static_cast<double>(std::int64_t{1} << level); }
   LevelLattice<D> finest() const { return {spacing_at(max_level)}; }
 
-  /// Levels of the blocks at the last regularization, by block index (hysteresis reads them).
+  /// Levels of the blocks at the last regularization, by block index (hysteresis reads them): every block in one
+  /// process, on many ranks those near a rank's part.
   const std::map<std::array<std::int64_t, D>, int>& levels() const { return levels_; }
   int previous_level(const std::array<std::int64_t, D>& block) const {
     const auto it = levels_.find(block);
@@ -64,24 +65,28 @@ struct MultiLevel {
   }
   void store_levels(std::map<std::array<std::int64_t, D>, int> levels) { levels_ = std::move(levels); }
 
-  /// Saves or restores the blocks' levels through a checkpoint archive (io/checkpoint.hpp).
+  /// Saves or restores the blocks' levels through a checkpoint archive (io/checkpoint.hpp): one row a block (its
+  /// index per axis, its level), every rank's rows in a file written by many, a share of them restored on each
+  /// (the next remap hands every rank the levels near its part, whichever rank holds them).
   template <class Archive>
   void checkpoint(Archive& ar) {
-    std::vector<std::int64_t> blocks;
+    std::array<std::vector<std::int64_t>, D> blocks;
     std::vector<int> levels;
     for (const auto& [block, level] : levels_) {
-      blocks.insert(blocks.end(), block.begin(), block.end());
+      for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) blocks[k].push_back(block[k]);
       levels.push_back(level);
     }
-    ar("lattice_blocks", blocks);
-    ar("lattice_levels", levels);
+    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k)
+      ar.rows("lattice_block_" + std::to_string(k), blocks[k]);
+    ar.rows("lattice_levels", levels);
     if (ar.saving()) return;
-    require(blocks.size() == D * levels.size(), "checkpoint: the lattice's block levels are misshapen");
+    for (const auto& axis : blocks)
+      require(axis.size() == levels.size(), "checkpoint: the lattice's block levels are misshapen");
     levels_.clear();
-    for (std::size_t k = 0; k < levels.size(); ++k) {
+    for (std::size_t i = 0; i < levels.size(); ++i) {
       std::array<std::int64_t, D> block;
-      std::copy_n(blocks.begin() + static_cast<std::ptrdiff_t>(D * k), D, block.begin());
-      levels_.emplace(block, levels[k]);
+      for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) block[k] = blocks[k][i];
+      levels_.emplace(block, levels[i]);
     }
   }
 

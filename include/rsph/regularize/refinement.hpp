@@ -19,15 +19,17 @@ namespace rsph::refine {
 
 /// What criteria see: the blocks of the lattice and, on its level-0 cells (spacing Delta_0), the mass
 /// and the covered volume the remap put there. Blocks are numbered x fastest; each spans
-/// `cells_per_block` level-0 cells per axis.
+/// `cells_per_block` level-0 cells per axis. On many ranks a rank sees a window of the blocks, whose first
+/// lies `first_block` blocks past the whole set's first, at `origin`.
 template <int D>
 struct BlockField {
-  Vec<D> origin;                          ///< lower corner of block 0
-  double spacing = 0.0;                   ///< Delta_0
-  std::int64_t cells_per_block = 1;       ///< level-0 cells per block and axis
-  std::array<std::int64_t, D> blocks{};   ///< blocks per axis
-  std::array<std::int64_t, D> periods{};  ///< blocks per periodic axis (0: not periodic)
-  std::vector<double> mass, volume;       ///< per level-0 cell, x fastest
+  Vec<D> origin;                              ///< lower corner of the whole set's first block
+  std::array<std::int64_t, D> first_block{};  ///< this field's first block, counted from the whole set's first
+  double spacing = 0.0;                       ///< Delta_0
+  std::int64_t cells_per_block = 1;           ///< level-0 cells per block and axis
+  std::array<std::int64_t, D> blocks{};       ///< blocks per axis
+  std::array<std::int64_t, D> periods{};      ///< blocks per periodic axis (0: not periodic)
+  std::vector<double> mass, volume;           ///< per level-0 cell, x fastest
 
   std::size_t n_blocks() const {
     std::size_t n = 1;
@@ -47,7 +49,9 @@ struct BlockField {
     const auto idx = block_index(b);
     Vec<D> lo;
     for (int k = 0; k < D; ++k)
-      lo[k] = origin[k] + static_cast<double>(idx[static_cast<std::size_t>(k)]) * block_size();
+      lo[k] =
+          origin[k] + static_cast<double>(idx[static_cast<std::size_t>(k)] + first_block[static_cast<std::size_t>(k)]) *
+                          block_size();
     return lo;
   }
   Vec<D> block_hi(std::size_t b) const { return block_lo(b) + Vec<D>::Constant(block_size()); }

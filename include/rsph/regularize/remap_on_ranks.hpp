@@ -38,17 +38,17 @@ void remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo i
   part.owns = [&owners](std::span<const double> sites) { return owners.owns(sites); };
   part.sum_over_ranks = [&d](std::span<double> v) { d.sum_in_place(v); };
   part.own = n_own;
+  part.exchange = [&d](const std::vector<std::vector<double>>& out, std::vector<int>* counts) {
+    return d.exchange(out, counts);
+  };
+  part.rank = d.comm().rank();
+  part.ranks = d.ranks();
   if constexpr (remaps_by_owners<Reg>()) {
     part.owner_of = [&owners](std::span<const double> sites) { return owners.owners(sites); };
-    part.exchange = [&d](const std::vector<std::vector<double>>& out, std::vector<int>* counts) {
-      return d.exchange(out, counts);
-    };
     part.encloses = [&d](std::span<const double> x, double r) {
       return d.gathered().encloses(Eigen::Map<const Vec<D>>(x.data()), r);
     };
     part.refresh = [&d](std::vector<double>& v, std::size_t width) { d.refresh_rows(v, width); };
-    part.rank = d.comm().rank();
-    part.ranks = d.ranks();
   }
   reg.remap(p, box, info);
 }

@@ -56,9 +56,9 @@ struct RankPart {
   std::size_t own = std::numeric_limits<std::size_t>::max();
   /// The remap by owners (either order, onto a lattice fixed by the box): each rank built the cells of its
   /// own particles only, and completes the sums of the new cells it keeps with the others' parts
-  /// (owner_sums.hpp). `owner_of` names the rank that keeps each point (D coordinates after another);
-  /// `exchange` sends list q to rank q and returns what every rank sent here in rank order (with the count from
-  /// each, when asked for).
+  /// (owner_sums.hpp). `owner_of` names the rank that keeps each point (D coordinates after another), and is
+  /// set for that remap alone. `exchange`, on many ranks, sends list q to rank q and returns what every rank sent
+  /// here in rank order (with the count from each, when asked for).
   std::function<std::vector<int>(std::span<const double>)> owner_of;
   std::function<std::vector<double>(const std::vector<std::vector<double>>&, std::vector<int>*)> exchange;
   /// The remap by owners: whether the ball of a radius about a point (D coordinates) lies where the local set
@@ -76,7 +76,7 @@ struct RankPart {
   /// Whether the remap is one rank's part of a decomposed set.
   bool on_ranks() const { return static_cast<bool>(max_over_ranks); }
   /// Whether every old cell was built by its owner alone, so that the new cells' sums must be completed.
-  bool by_owners() const { return static_cast<bool>(exchange); }
+  bool by_owners() const { return static_cast<bool>(owner_of); }
 };
 
 /// What a remap carries into one new cell: mass (eq. 6), momentum (eq. 8), total energy m (e + v^2/2) (eq. 9
@@ -135,9 +135,9 @@ struct RemapStats {
   }
 };
 
-/// One remap's figures over every rank's part of it, on every rank: the counts and the kinetic energy converted
-/// summed; the worst volume mismatch, and the figures every rank finds alike (the blocks capped, the level asked,
-/// the passes), their largest. In one process, `s` itself.
+/// One remap's figures over every rank's part of it, on every rank: the counts (the blocks capped among them, each
+/// counted by one rank) and the kinetic energy converted summed; the worst volume mismatch, the level asked and the
+/// passes, their largest. In one process, `s` itself.
 inline RemapStats over_ranks(RemapStats s, const RankPart& part) {
   if (!part.on_ranks()) return s;
   std::vector<double> sums{static_cast<double>(s.n_before),
@@ -146,7 +146,8 @@ inline RemapStats over_ranks(RemapStats s, const RankPart& part) {
                            static_cast<double>(s.dropped_cells),
                            static_cast<double>(s.first_order_cells),
                            static_cast<double>(s.limited_cells),
-                           static_cast<double>(s.summed_cells)};
+                           static_cast<double>(s.summed_cells),
+                           static_cast<double>(s.capped_blocks)};
   for (const std::size_t n : s.per_level) sums.push_back(static_cast<double>(n));  // alike in length on every rank
   part.sum_over_ranks(sums);
   auto count = [&](std::size_t k) { return static_cast<std::size_t>(sums[k]); };  // exact below 2^53
@@ -157,9 +158,9 @@ inline RemapStats over_ranks(RemapStats s, const RankPart& part) {
   s.first_order_cells = count(4);
   s.limited_cells = count(5);
   s.summed_cells = count(6);
-  for (std::size_t l = 0; l < s.per_level.size(); ++l) s.per_level[l] = count(7 + l);
+  s.capped_blocks = count(7);
+  for (std::size_t l = 0; l < s.per_level.size(); ++l) s.per_level[l] = count(8 + l);
   s.max_volume_mismatch = part.max(s.max_volume_mismatch);
-  s.capped_blocks = static_cast<std::size_t>(part.max(static_cast<double>(s.capped_blocks)));
   s.requested_level = static_cast<int>(part.max(s.requested_level));
   s.passes = static_cast<int>(part.max(s.passes));
   return s;
