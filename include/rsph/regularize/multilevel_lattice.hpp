@@ -59,10 +59,6 @@ struct MultiLevel {
   /// Levels of the blocks at the last regularization, by block index (hysteresis reads them): every block in one
   /// process, on many ranks those near a rank's part.
   const std::map<std::array<std::int64_t, D>, int>& levels() const { return levels_; }
-  int previous_level(const std::array<std::int64_t, D>& block) const {
-    const auto it = levels_.find(block);
-    return it == levels_.end() ? refine::no_previous_level : it->second;
-  }
   void store_levels(std::map<std::array<std::int64_t, D>, int> levels) { levels_ = std::move(levels); }
 
   /// Saves or restores the blocks' levels through a checkpoint archive (io/checkpoint.hpp): one row a block (its
