@@ -63,15 +63,9 @@ struct Gathered {
 template <int D>
 class SiteOwners {
  public:
-  SiteOwners(const std::vector<Vec<D>>& x, const std::vector<std::uint64_t>& id, std::size_t n_own, const Box<D>& box,
-             double reach, std::vector<int> rank = {}, Gathered<D> gathered = {})
-      : id_(id),
-        rank_(std::move(rank)),
-        n_own_(n_own),
-        reach_(reach),
-        gathered_(std::move(gathered)),
-        pts_(x),
-        of_(x.size()) {
+  SiteOwners(const std::vector<Vec<D>>& x, const std::vector<std::uint64_t>& id, const Box<D>& box, double reach,
+             std::vector<int> rank, Gathered<D> gathered = {})
+      : id_(id), rank_(std::move(rank)), reach_(reach), gathered_(std::move(gathered)), pts_(x), of_(x.size()) {
     for (std::size_t i = 0; i < of_.size(); ++i) of_[i] = static_cast<std::uint32_t>(i);
     for (int k = 0; k < D; ++k) {  // images of the points near periodic faces
       if (!box.periodic(k)) continue;
@@ -90,34 +84,22 @@ class SiteOwners {
     cells_.build(pts_, first_radius());
   }
 
-  /// Whether `site` is this rank's.
-  bool owned(const Vec<D>& site) const { return nearest(site) < n_own_; }
-  /// The rank that keeps `site`.
-  int owner(const Vec<D>& site) const { return rank_.at(nearest(site)); }
-  /// Per point of `sites` (D coordinates after another): whether it is this rank's.
-  std::vector<std::uint8_t> owns(std::span<const double> sites) const { return per_site<std::uint8_t>(sites, true); }
   /// Per point of `sites`: the rank that keeps it, or -1 where a particle nearer than the nearest found here
   /// could lie outside the gathered set (`gathered`), so that only a wider halo tells.
-  std::vector<int> owners(std::span<const double> sites) const { return per_site<int>(sites, false); }
-
- private:
-  template <class T>
-  std::vector<T> per_site(std::span<const double> sites, bool mine_only) const {
-    std::vector<T> out(sites.size() / D);
+  std::vector<int> owners(std::span<const double> sites) const {
+    std::vector<int> out(sites.size() / D);
     rsph::run_parallel(out.size(), [&](int, std::size_t begin, std::size_t end) {
       for (std::size_t i = begin; i < end; ++i) {
         const Eigen::Map<const Vec<D>> site(sites.data() + D * i);
-        if (mine_only) {
-          out[i] = T(owned(site));
-        } else {
-          double distance = 0.0;
-          const std::size_t a = nearest(site, &distance);
-          out[i] = gathered_.encloses(site, distance) ? T(rank_.at(a)) : T(-1);
-        }
+        double distance = 0.0;
+        const std::size_t a = nearest(site, &distance);
+        out[i] = gathered_.encloses(site, distance) ? rank_.at(a) : -1;
       }
     });
     return out;
   }
+
+ private:
   /// The local index of the old particle nearest to `site`.
   std::size_t nearest(const Vec<D>& site, double* distance = nullptr) const {
     const std::size_t none = id_.size();
@@ -143,7 +125,6 @@ class SiteOwners {
 
   std::vector<std::uint64_t> id_;
   std::vector<int> rank_;  ///< the rank that owns each particle of the local set
-  std::size_t n_own_;
   double reach_;
   Gathered<D> gathered_;
   std::vector<Vec<D>> pts_;
@@ -158,11 +139,7 @@ struct DecompositionParams {
   /// `repartition_every` steps (particles drift away from their rank's part, its halo grows).
   double rebalance_above = 1.1;
   int repartition_every = 20;
-  /// How far, in the largest h, a rank's remap reaches into its neighbours' particles: an old cell's radius
-  /// (about 2h at most), the new cells it meets, the old cells those meet and whose cells they need (three
-  /// radii), and two lattice layers for the hand-on of nearly empty cells at the edge of what a rank sees.
-  double remap_reach_in_h = 12.0;
-  /// The remap by owners (each old cell built by its owner alone, regularize::remaps_by_owners) gathers the
+  /// The remap (each old cell built by its owner alone, regularize/remap_on_ranks.hpp) gathers the
   /// particles within this many largest h at first, and half as far again until every rank's own cells and the
   /// keepers of the new cells it asks about are decided within what it gathered (Gathered); later remaps start
   /// from the reach the last one needed.
@@ -181,7 +158,6 @@ struct DecompositionParams {
     partition.validate();
     require(rebalance_above >= 1.0, "the decomposition's rebalance threshold must be at least 1");
     require(repartition_every >= 1, "the decomposition must repartition at least every step count >= 1");
-    require(remap_reach_in_h > 0.0, "the decomposition's remap reach must be positive");
     require(owner_reach_in_h > 0.0, "the decomposition's first reach of the remap by owners must be positive");
     require(halo_piece_levels >= 0 && halo_piece_levels <= 10,
             "the decomposition's halo pieces must be split 0 to 10 times");
@@ -376,7 +352,6 @@ class Decomposition {
   const ExchangeCounts& counts() const { return counts_; }
   /// Wall seconds in MPI calls so far (messages, and waiting for the other ranks).
   double communication_seconds() const { return comm_->seconds(); }
-  double remap_reach_in_h() const { return params_.remap_reach_in_h; }
   /// How far, in the largest h, the next remap by owners gathers first: the reach the last one needed.
   double owner_reach_in_h() const { return owner_reach_in_h_; }
 
@@ -534,31 +509,13 @@ class Decomposition {
   /// After add_remap_halo: where the local set holds every particle of the run.
   const Gathered<D>& gathered() const { return gathered_; }
 
-  /// After add_remap_halo, on many ranks: the particles whose cells the remap builds (ascending), this rank's own
-  /// n_own and the others within `width` of their bounds (across periodic faces too). Cells farther out feed only
-  /// sites another rank keeps, and where the halo ends they are open.
-  template <bool E>
-  std::vector<std::uint32_t> remap_cells(const ParticleSet<D, E>& p, const Box<D>& box, std::size_t n_own,
-                                         double width) const {
-    std::vector<std::uint32_t> only(n_own);
-    for (std::size_t a = 0; a < n_own; ++a) only[a] = static_cast<std::uint32_t>(a);
-    if (n_own == 0) return only;  // nothing here, and so no halo either
-    Vec<D> lo = p.x[0], hi = p.x[0];
-    for (std::size_t a = 1; a < n_own; ++a) lo = lo.cwiseMin(p.x[a]), hi = hi.cwiseMax(p.x[a]);
-    lo.array() -= width;
-    hi.array() += width;
-    for (std::size_t a = n_own; a < p.n_real; ++a)
-      if (reaches<D>(p.x[a], lo, hi, box, width)) only.push_back(static_cast<std::uint32_t>(a));
-    return only;
-  }
-
   /// After add_remap_halo: which rank keeps each new site, from the local set (this rank's own the first n_own),
   /// for sites within `reach` of an old particle.
   template <bool E>
-  SiteOwners<D> site_owners(const ParticleSet<D, E>& p, const Box<D>& box, std::size_t n_own, double reach) const {
+  SiteOwners<D> site_owners(const ParticleSet<D, E>& p, const Box<D>& box, double reach) const {
     std::vector<int> rank = remap_rank_;
     rank.resize(p.n_real, comm_->rank());  // one rank: no halo
-    return SiteOwners<D>(p.x, p.id, n_own, box, reach, std::move(rank), gathered_);
+    return SiteOwners<D>(p.x, p.id, box, reach, std::move(rank), gathered_);
   }
 
   /// New identities for the real particles, after every rank's earlier ones and rank by rank (after a remap, whose

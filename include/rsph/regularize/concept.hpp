@@ -78,22 +78,13 @@ constexpr bool check_schedule() {
 namespace regularize {
 
 /// Whether regularizer R runs on many ranks (mpi/decomposition.hpp): one whose new lattice every rank can lay out
-/// alike (from the box, or from figures reduced over the ranks), so that each rank can remap its part with its
-/// neighbours' particles (`remaps_on_ranks`).
+/// alike (from the box, or from figures reduced over the ranks) and whose remap builds each old cell once, on its
+/// particle's rank, completing the new cells' sums with the other ranks' parts (`remaps_on_ranks`;
+/// regularize/remap_on_ranks.hpp).
 template <class R>
 constexpr bool remaps_on_ranks() {
   if constexpr (requires { R::remaps_on_ranks; })
     return R::remaps_on_ranks;
-  else
-    return false;
-}
-
-/// Whether regularizer R builds each old cell once on many ranks, by its owner (`remaps_by_owners`), rather than
-/// every cell near a rank's particles on that rank.
-template <class R>
-constexpr bool remaps_by_owners() {
-  if constexpr (requires { R::remaps_by_owners; })
-    return R::remaps_by_owners;
   else
     return false;
 }

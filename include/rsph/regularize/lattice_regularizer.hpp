@@ -91,21 +91,13 @@ class LatticeRegularizer {
   /// The driver hands the schedule n_a of eq. (A1) from its density pass (StepInfo::number_density).
   static constexpr bool wants_number_density = requires { requires Schedule::wants_number_density; };
   /// One regular lattice fixed by the box runs on many ranks, and a lattice that says it does (the multi-level
-  /// lattice, whose levels every rank chooses alike from the whole set's field; the rings, whose phases are summed
-  /// over the ranks).
+  /// lattice, whose levels every rank chooses alike from the level-0 field the ranks complete together; the rings,
+  /// whose phases are summed over the ranks). Either order builds each old cell once, on the rank that owns its
+  /// particle, and sends the overlaps to the ranks that keep the new cells (owner_sums.hpp; the second order also
+  /// the neighbours' geometry, the limiter's bounds and the thermal floor's cells; level_owners.hpp on levels).
   static constexpr bool remaps_on_ranks =
       (RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice>) || requires {
     requires Lattice::remaps_on_ranks;
-  };
-
-  /// On many ranks, the remap onto a lattice fixed by the box, or onto one that says it does (the rings, whose
-  /// sites every rank numbers alike), builds each old cell once, either order, on the rank that owns its
-  /// particle, and sends the overlaps to the ranks that keep the new cells (owner_sums.hpp; the second order
-  /// also the neighbours' geometry, the limiter's bounds and the thermal floor's cells); the others (the
-  /// multi-level lattice) build the cells of their neighbours' particles near them too.
-  static constexpr bool remaps_by_owners =
-      (RegularLattice<Lattice, Lattice::dim> && !PerSiteLattice<Lattice>) || requires {
-    requires Lattice::remaps_by_owners;
   };
 
   using Options = RegularizerOptions<Builder, Region, Order>;

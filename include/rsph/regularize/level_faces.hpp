@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <numeric>
+#include <span>
 #include <vector>
 
 namespace rsph::regularize::detail {
@@ -317,10 +318,11 @@ inline Faces level_faces(const CellGrid<1>& grid, const Footprint<1>& fp) {
   });
 }
 
+/// `only` (ascending, empty for all): the old particles whose intervals hand out (on many ranks, a rank's own).
 template <bool E>
 void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const lattice::Uniform1D& fine,
                       const RemapParams& params, const CellGrid<1>& grid, const Footprint<1>& fp, const Faces& faces,
-                      Sums<1>& cells, std::vector<double>& volume) {
+                      Sums<1>& cells, std::vector<double>& volume, std::span<const std::uint32_t> only = {}) {
   const double dx = fp.dx;
   const double L = box.hi[0] - box.lo[0];
   auto site = [&](std::size_t c) { return fp.site(c)[0]; };
@@ -351,6 +353,7 @@ void remap_face_cells(const ParticleSet<1, E>& p, const Box<1>& box, const latti
       if (q >= 0) push(q);
   };
   auto hand_out = [&](std::size_t a, double left, double right, const auto& ov, double V_o) {
+    if (!only.empty() && !std::binary_search(only.begin(), only.end(), static_cast<std::uint32_t>(a))) return;
     std::int32_t best_face = -1;
     const double A_F = face_candidates(ov, fp.owner, faces.face_of, near, cand, best_face);
     if (!(A_F > 0.0)) return;

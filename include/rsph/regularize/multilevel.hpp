@@ -8,6 +8,7 @@
 #include "rsph/core/particle_set.hpp"
 #include "rsph/regularize/lattice.hpp"
 #include "rsph/regularize/level_faces.hpp"
+#include "rsph/regularize/level_owners.hpp"
 #include "rsph/regularize/level_windows.hpp"
 #include "rsph/regularize/multilevel_lattice.hpp"
 #include "rsph/regularize/refinement.hpp"
@@ -98,37 +99,21 @@ struct LevelGrids {
 };
 
 /// The field the criteria read, over the blocks of `grids.window`: from this process's sums on it, or on many ranks
-/// from each rank's sums on its part `grid`: a rank adds the finest cells whose site it owns (its overlaps there
-/// are complete) into its level-0 cells, and the ranks whose windows meet trade them (trade_level_inputs), so that
-/// every rank holds the same bits in a cell. What travels is one record a level-0 cell, not one a finest cell; with
-/// them the levels kept at the last remap travel into `previous`.
-template <int D, class Criterion, class Lattice>
-refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box, const Lattice& fine,
+/// from each rank's part of the sums on its part of the finest grid (the remap by owners: every old cell was built
+/// by its owner alone, so the parts add up to the whole set's sums). A rank adds its parts into its level-0 cells,
+/// and the ranks whose windows meet trade them (trade_level_inputs), so that every rank holds the same bits in a
+/// cell. What travels is one record a level-0 cell, not one a finest cell; with them the levels kept at the last
+/// remap travel into `previous`.
+template <int D, class Criterion>
+refine::BlockField<D> level0_field(const lattice::MultiLevel<D, Criterion>& ml, const Box<D>& box,
                                    const LevelGrids<D>& grids, const Sums<D>& S, const RankPart& part,
                                    const RankWindows<D>& all, BlockIndex<D>& block0,
                                    std::map<BlockIndex<D>, int>& previous) {
-  const CellGrid<D>& grid = grids.local;
   auto field = level0_layout(ml, box, grids.whole, grids.window, block0);
-  if (!part.on_ranks()) {
-    add_finest_cells(field, ml, grids.window, grid, [&](std::size_t f) {
-      return std::pair{S.cell[f].m, S.cell[f].volume};
-    });
-    return field;
-  }
-  std::vector<std::size_t> covered;  // the cells some old cell built here meets
-  std::vector<double> sites;
-  for (std::size_t f = 0; f < grid.n_cells; ++f)
-    if (S.cell[f].volume != 0.0) {
-      covered.push_back(f);
-      const Vec<D> x = fine.site(box, grid.unflat(f));
-      sites.insert(sites.end(), x.data(), x.data() + D);
-    }
-  const auto mine = part.owns(sites);
-  std::vector<std::uint8_t> owned(grid.n_cells, 0);
-  for (std::size_t i = 0; i < covered.size(); ++i) owned[covered[i]] = mine[i];
-  add_finest_cells(field, ml, grids.window, grid, [&](std::size_t f) {
-    return owned[f] ? std::pair{S.cell[f].m, S.cell[f].volume} : std::pair{0.0, 0.0};
+  add_finest_cells(field, ml, grids.window, grids.local, [&](std::size_t f) {
+    return std::pair{S.cell[f].m, S.cell[f].volume};
   });
+  if (!part.on_ranks()) return field;
   return trade_level_inputs(field, block0, ml.levels(), all, part, previous);
 }
 
@@ -148,7 +133,8 @@ LevelGrids<D> level_grids(const ParticleSet<D, E>& p, const Box<D>& box, const l
     hi = hi.cwiseMax(p.x[a]);
     h_max = std::max(h_max, p.h[a]);
   }
-  const double reach = params.closing_radius_in_h * h_max * 1.1;
+  // the old cells built here, and on many ranks the new cells near them that the hand-on and face cells read
+  const double reach = params.closing_radius_in_h * h_max * 1.1 + level0_cells_beyond_own * ml.spacing;
   const auto touched = fine.cells_touching(box, (lo.array() - reach).matrix(), (hi.array() + reach).matrix());
   auto floor_div = [](std::int64_t a, std::int64_t b) { return a >= 0 ? a / b : -((-a + b - 1) / b); };
   double cells = 1.0;
@@ -250,58 +236,9 @@ Footprint<D> footprint(const refine::BlockField<D>& field, const std::vector<int
   return fp;
 }
 
-/// f(o) for the owners o of the finest cells in the one-cell ring around c's footprint (repeats possible).
-template <int D, class F>
-void for_each_ring_neighbour(const CellGrid<D>& grid, const Footprint<D>& fp, std::size_t c, F&& f) {
-  const std::int64_t s = fp.span[c];
-  std::array<std::int64_t, D> off;
-  off.fill(-1);
-  std::uint32_t last = static_cast<std::uint32_t>(c);
-  do {
-    bool ring = false;
-    std::array<std::int64_t, D> g;
-    for (std::size_t k = 0; k < static_cast<std::size_t>(D); ++k) {
-      ring = ring || off[k] < 0 || off[k] >= s;
-      g[k] = grid.range.lo[k] + fp.first_fine[c][k] + off[k];
-    }
-    if (ring) {
-      const std::int64_t fl = grid.flat(g);
-      if (fl >= 0) {
-        const std::uint32_t o = fp.owner[static_cast<std::size_t>(fl)];
-        if (o != c && o != last) f(static_cast<std::size_t>(o));  // repeats only cost a comparison
-        last = o;
-      }
-    }
-  } while (next_index<D>(off, -1, s + 1));
-}
-
-}  // namespace detail
-
-namespace detail {
-
-/// On many ranks, flags in `elsewhere` the new cells with mass whose site another rank keeps (every rank sums the
-/// cells its gathered gas covers): their hand-on is read here, their particles are born there.
-template <int D>
-void flag_kept_elsewhere(const Footprint<D>& fp, const Sums<D>& cells, const RankPart& part,
-                         std::vector<std::uint8_t>& elsewhere) {
-  elsewhere.clear();
-  if (!part.on_ranks()) return;
-  std::vector<std::size_t> heavy;
-  std::vector<double> sites;
-  for (std::size_t c = 0; c < fp.size(); ++c)
-    if (cells.cell[c].m > 0.0) {
-      heavy.push_back(c);
-      const Vec<D> x = fp.site(c);
-      sites.insert(sites.end(), x.data(), x.data() + D);
-    }
-  const auto mine = part.owns(sites);
-  elsewhere.assign(fp.size(), 0);
-  for (std::size_t i = 0; i < heavy.size(); ++i) elsewhere[heavy[i]] = !mine[i];
-}
-
 /// The end of the multi-level remap: nearly empty cells handed on, one particle per kept cell with h ramped
-/// towards coarser blocks (on many ranks, per cell this rank keeps), and the levels of the blocks `kept` stored for
-/// the next remap.
+/// towards coarser blocks (on many ranks, per cell this rank keeps: ws.elsewhere flags the others, whose sums the
+/// hand-on reads), and the levels of the blocks `kept` stored for the next remap.
 template <int D, bool E, class Criterion, class Field, class Levels>
 void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml, const RemapParams& params,
                     const CellGrid<D>& grid, const BlockRange<D>& kept, const Footprint<D>& fp, const Field& field,
@@ -309,7 +246,6 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
                     const std::vector<double>& cell_volume, RemapWorkspace<D>& ws, RemapStats& stats,
                     const RankPart& part) {
   auto& keep = ws.keep;
-  flag_kept_elsewhere(fp, cells, part, ws.elsewhere);
   hand_on_sparse_cells<D>(
       cells, params, [&](std::size_t c) { return cell_volume[c]; },
       [&](std::size_t c, auto&& f) { for_each_ring_neighbour(grid, fp, c, f); }, stats.dropped_cells, keep, part,
@@ -349,10 +285,12 @@ void emit_on_levels(ParticleSet<D, E>& p, lattice::MultiLevel<D, Criterion>& ml,
 /// takes the old cells that reach a face cell to first order, as the face cells' hand-out is). Then every
 /// block's level from the criterion (capped at the finest level, 2:1 balanced), one particle per kept cell,
 /// block by block and in lattice order within a block, with h = h_over_dx * Delta_l.
-/// `part`: on many ranks, each rank sums on its part of the finest grid and chooses the levels over a window
-/// around it from the level-0 field the ranks whose windows meet complete together (one record a level-0 cell),
-/// so that the blocks it needs get the levels one process gives them; the old cells built again at faces are
-/// among those built for the sums.
+/// `part`: on many ranks, each rank builds the old cells of its own particles only (the remap by owners), sums
+/// their parts on its part of the finest grid and chooses the levels over a window around it from the level-0
+/// field the ranks whose windows meet complete together (one record a level-0 cell), so that the blocks it needs get
+/// the levels one process gives them; the face cells take the parts of its own old cells too, and each new cell's
+/// parts are added at the rank that keeps it (level_owners.hpp). A rank's old cells or keepers beyond what it
+/// gathered raise HaloTooNarrow on every rank, before any particle changed.
 template <int D, class Criterion, class Builder, bool E, class Region, class SumsOn, class AtFaces>
 RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::MultiLevel<D, Criterion>& ml,
                              Builder& builder, const RemapParams& params, const Region& region, RemapWorkspace<D>& ws,
@@ -368,7 +306,7 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
   RankWindows<D> all;  // on many ranks, every rank's window and kept blocks
   if (part.on_ranks()) all = gather_windows(blocks_of(grids.window, align), grids.kept, part);
   std::map<std::array<std::int64_t, D>, int> traded;  // on many ranks, the previous levels of the window's blocks
-  const auto field = level0_field(ml, box, fine, grids, *S, part, all, block0, traded);
+  const auto field = level0_field(ml, box, grids, *S, part, all, block0, traded);
   const auto level = choose_levels(
       ml, field, block0, part.on_ranks() ? traded : ml.levels(),
       [&](const BlockIndex<D>& b) { return !part.on_ranks() || counts_block_here(all, part.rank, b); }, stats);
@@ -388,7 +326,13 @@ RemapStats remap_onto_levels(ParticleSet<D, E>& p, const Box<D>& box, lattice::M
     if constexpr (D == 2)
       remap_face_cells(p, box, fine, builder, grid, region, ws, fp, faces, cells, cell_volume);
     else
-      remap_face_cells(p, box, fine, params, grid, fp, faces, cells, cell_volume);
+      remap_face_cells(p, box, fine, params, grid, fp, faces, cells, cell_volume, part.cells);
+  }
+  ws.elsewhere.clear();
+  if (part.by_owners()) {  // the parts of every rank added at the cells' keepers
+    const auto own_reach = std::span<const double>(ws.reach).first(std::min(part.own, ws.reach.size()));
+    complete_level_cells(cells, LevelCells<D>{&grids.whole, &grid, &fp}, part, cells_complete(p, own_reach, part),
+                         ws.elsewhere);
   }
   emit_on_levels(p, ml, params, grid, grids.kept, fp, field, level, block0, cells, cell_volume, ws, stats, part);
   return stats;
@@ -414,8 +358,9 @@ RemapStats remap_onto_lattice(ParticleSet<D, E>& p, const Box<D>& box, lattice::
       p, box, ml, builder, params, region, ws, detail::level_grids(p, box, ml, params, part),
       [&](const detail::CellGrid<D>& g, RemapStats&) -> detail::Sums<D>& {
         // remap_face_cells picks the old cells to build again by their reach
-        return detail::accumulate_overlaps(p, box, fine, builder, params, g, region, ws, ml.max_level > 0, false,
-                                           part.cells);
+        // (and the remap by owners checks that the cells are complete by it)
+        return detail::accumulate_overlaps(p, box, fine, builder, params, g, region, ws,
+                                           ml.max_level > 0 || part.by_owners(), false, part.cells);
       },
       [&](const auto&, const detail::Faces&, RemapStats&) -> detail::Sums<D>& { return ws.sums[0]; }, part);
 }

@@ -29,7 +29,9 @@ struct MultiLevel {
   static constexpr int dim = D;
   static constexpr int deepest_supported = 10;
   /// Runs on many ranks: every rank chooses the levels of the blocks near its part from the field the ranks
-  /// complete together, as one process would, and keeps those alone (multilevel.hpp, level_windows.hpp).
+  /// complete together, as one process would, and keeps those alone (multilevel.hpp, level_windows.hpp); it builds
+  /// its own particles' old cells only, and each new cell's parts are added at the rank that keeps it
+  /// (level_owners.hpp).
   static constexpr bool remaps_on_ranks = true;
 
   double spacing;   ///< Delta_0, the coarsest level's spacing

@@ -92,6 +92,12 @@ struct GridCells {
   }
   /// The whole grid's cell of the local grid's cell `flat` (-1: outside).
   std::int64_t whole_flat(std::size_t flat) const { return whole->flat(local->unflat(flat)); }
+  /// The local grid's cell of the whole grid's cell f, which must lie in it.
+  std::size_t local_flat(std::size_t f) const {
+    const std::int64_t l = local->flat(whole->unflat(f));
+    require(l >= 0, "regularization: a new cell kept here lies beyond the grid this rank sums on");
+    return static_cast<std::size_t>(l);
+  }
 };
 
 /// The sites of the new cells `flats` (`cells`: GridCells, or a per-site lattice's), D coordinates after another,

@@ -1,6 +1,7 @@
 #pragma once
 // The remap on many ranks, for a simulation whose scene names a domain decomposition (mpi/decomposition.hpp):
 // what each rank gathers, builds and keeps so that the new particles over all ranks are those of one process.
+// Every regularizer that runs on ranks remaps by owners: each old cell is built once, by its particle's rank.
 // A function of the decomposition, the particle set and the regularizer, not of the kernel: the simulations of
 // one scene with different kernels share its code.
 #include "rsph/core/errors.hpp"
@@ -21,21 +22,17 @@ namespace rsph::regularize {
 
 namespace detail {
 
-/// One rank's part of the remap, after add_remap_halo: the cells of `cells` (this rank's own n_own when empty)
-/// built and remapped, and the new particles of the sites this rank keeps emitted. `reach`: the kernel's support
-/// times h_max.
+/// One rank's part of the remap, after add_remap_halo: the cells of its own n_own particles built and remapped,
+/// the new cells' parts completed at the ranks that keep them, and the new particles of the sites this rank keeps
+/// emitted. `reach`: the kernel's support times h_max.
 template <class Domain, class Particles, int D, class Reg>
-void remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo info, std::size_t n_own, double reach,
-                std::vector<std::uint32_t> cells = {}) {
-  if (cells.empty()) {
-    cells.resize(n_own);
-    std::iota(cells.begin(), cells.end(), 0u);
-  }
-  auto owners = d.site_owners(p, box, n_own, reach);
+void remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo info, std::size_t n_own, double reach) {
+  std::vector<std::uint32_t> cells(n_own);
+  std::iota(cells.begin(), cells.end(), 0u);
+  auto owners = d.site_owners(p, box, reach);
   auto& part = info.part;
   part.cells = cells;
   part.max_over_ranks = [&d](double v) { return d.max(v); };
-  part.owns = [&owners](std::span<const double> sites) { return owners.owns(sites); };
   part.sum_over_ranks = [&d](std::span<double> v) { d.sum_in_place(v); };
   part.own = n_own;
   part.exchange = [&d](const std::vector<std::vector<double>>& out, std::vector<int>* counts) {
@@ -43,46 +40,37 @@ void remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo i
   };
   part.rank = d.comm().rank();
   part.ranks = d.ranks();
-  if constexpr (remaps_by_owners<Reg>()) {
-    part.owner_of = [&owners](std::span<const double> sites) { return owners.owners(sites); };
-    part.encloses = [&d](std::span<const double> x, double r) {
-      return d.gathered().encloses(Eigen::Map<const Vec<D>>(x.data()), r);
-    };
-    part.refresh = [&d](std::vector<double>& v, std::size_t width) { d.refresh_rows(v, width); };
-  }
+  part.owner_of = [&owners](std::span<const double> sites) { return owners.owners(sites); };
+  part.encloses = [&d](std::span<const double> x, double r) {
+    return d.gathered().encloses(Eigen::Map<const Vec<D>>(x.data()), r);
+  };
+  part.refresh = [&d](std::vector<double>& v, std::size_t width) { d.refresh_rows(v, width); };
   reg.remap(p, box, info);
 }
 
 }  // namespace detail
 
-/// The remap on many ranks: each rank remaps its own particles with those of other ranks out to the remap's
-/// reach, keeps the new particles whose site its own gas held, and checks that the mass over all ranks is what
-/// it was (a reach too short would lose or double some). A regularizer that remaps by owners builds the cells of
-/// this rank's own particles only and completes the new cells' sums with the other ranks' parts; it gathers the
-/// others' particles out to a short reach, and half as far again, on every rank, where some rank's cells reach
-/// beyond (Decomposition::gather_farther). The others build the cells of the other ranks' particles near this
-/// rank's too, and emit only the new particles of the sites this rank keeps. `support`: the kernel's, in units of h.
+/// The remap on many ranks: each rank builds the cells of its own particles only and completes the new cells' sums
+/// with the other ranks' parts (the remap by owners: every old cell built once, by its owner), keeps the new
+/// particles whose site its own gas held, and checks that the mass over all ranks is what it was. It gathers the
+/// others' particles out to a short reach, and half as far again, on every rank, where some rank's cells or the
+/// keepers it asks of reach beyond (Decomposition::gather_farther). `support`: the kernel's, in units of h.
 /// Returns the kinetic energy the remap removed over all ranks.
 template <class Domain, class Particles, int D, class Reg>
 double remap_on_ranks(Domain& d, Particles& p, const Box<D>& box, Reg& reg, const StepInfo& info, double support) {
+  static_assert(remaps_on_ranks<Reg>(), "this regularizer does not run on many ranks");
   const auto before = d.totals(p);
   double h_max = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) h_max = std::max(h_max, p.h[a]);
   h_max = d.max(h_max);
-  if constexpr (remaps_by_owners<Reg>()) {
-    for (;;) {
-      const std::size_t n_own = d.add_remap_halo(p, box, d.owner_reach_in_h() * h_max);
-      try {
-        detail::remap_part(d, p, box, reg, info, n_own, support * h_max);
-        break;
-      } catch (const HaloTooNarrow&) {  // raised on every rank at once, before any particle changed
-        d.gather_farther(p, n_own);
-      }
+  for (;;) {
+    const std::size_t n_own = d.add_remap_halo(p, box, d.owner_reach_in_h() * h_max);
+    try {
+      detail::remap_part(d, p, box, reg, info, n_own, support * h_max);
+      break;
+    } catch (const HaloTooNarrow&) {  // raised on every rank at once, before any particle changed
+      d.gather_farther(p, n_own);
     }
-  } else {
-    const std::size_t n_own = d.add_remap_halo(p, box, d.remap_reach_in_h() * h_max);
-    detail::remap_part(d, p, box, reg, info, n_own, support * h_max,
-                       d.remap_cells(p, box, n_own, 0.5 * d.remap_reach_in_h() * h_max));
   }
   d.renumber(p);  // the remap emitted only the sites this rank keeps
   const auto after = d.totals(p);

@@ -41,20 +41,17 @@ struct RemapParams {
 /// A remap of one rank's part of a decomposed set (mpi/decomposition.hpp): the old particles whose cells it
 /// builds (ascending; empty: every one), and the largest of a value over every rank (the heaviest new cell, which
 /// min_mass_ratio scales, must be the whole set's). Empty in one process: the whole set, nothing to reduce.
-/// A lattice that reads the whole set (a multi-level lattice's levels, the rings' phases) also takes `owns`,
+/// A lattice that reads the whole set (a multi-level lattice's levels, the rings' phases) also takes
 /// `sum_over_ranks` and `own`.
 struct RankPart {
   std::span<const std::uint32_t> cells;
   std::function<double(double)> max_over_ranks;
-  /// Whether each point (D coordinates after another) is this rank's: its nearest old particle is, so a new
-  /// site there is kept here and the overlaps there are complete here. Every point is exactly one rank's.
-  std::function<std::vector<std::uint8_t>(std::span<const double>)> owns;
   /// Element-wise sums over the ranks, in place (MPI's order; exact where one rank holds each value).
   std::function<void(std::span<double>)> sum_over_ranks;
   /// How many of the local set's first particles are this rank's own (the others are other ranks' out to the
   /// remap's reach): a sum over the whole set adds only these on each rank. Every one in one process.
   std::size_t own = std::numeric_limits<std::size_t>::max();
-  /// The remap by owners (either order, onto a lattice fixed by the box): each rank built the cells of its
+  /// The remap by owners (either order, every lattice that runs on ranks): each rank built the cells of its
   /// own particles only, and completes the sums of the new cells it keeps with the others' parts
   /// (owner_sums.hpp). `owner_of` names the rank that keeps each point (D coordinates after another), and is
   /// set for that remap alone. `exchange`, on many ranks, sends list q to rank q and returns what every rank sent

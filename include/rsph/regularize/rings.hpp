@@ -440,8 +440,6 @@ struct Rings {
   /// Runs on many ranks: every rank lays out the whole gas's rings, turned by phases summed over the ranks, and
   /// builds the cells its old cells meet (`following`).
   static constexpr bool remaps_on_ranks = true;
-  /// ... and by owners: each old cell built once, by its particle's rank, the sums sent by site number.
-  static constexpr bool remaps_by_owners = true;
   double spacing = 0.0;
   double r_in = 0.0;                                       ///< the innermost ring's inner edge
   double r_out = std::numeric_limits<double>::infinity();  ///< the outermost ring's outer edge (infinite: none)

@@ -141,6 +141,16 @@ class ByOwners {
   /// Whether any rank counted any (the thermal floor's cells: every rank takes the same passes).
   bool any(std::size_t n) const { return part_->max(static_cast<double>(n)) > 0.0; }
 
+  /// After complete_sums, on sums dense over this rank's grid (`cells_` a detail::GridCells): the complete sums of the
+  /// cells this rank keeps, the others' emptied, so that the ranks' sums add up to one process's (the multi-level
+  /// remap adds them into its coarser cells and trades them).
+  void keep_kept_only(detail::Sums<D>& S) const {
+    for (std::size_t i = 0; i < entry_.size(); ++i)
+      if (owner_[i] != part_->rank) S.cell[entry_[i]] = Conserved<D>{};
+    for (std::size_t e = 0; e < extra_.name.size(); ++e)  // kept here, touched by the others' cells alone
+      S.cell[cells_.local_flat(extra_.name[e])] = detail::read_sums<D>(&extra_.values[e * width_]);
+  }
+
   /// After the last complete_sums: the complete sums of the cells this rank keeps and of those within two layers
   /// that others keep (`elsewhere`), on the grid of the whole set in lattice order, for the hand-on and emission.
   detail::Sums<D> kept_sums(const detail::Sums<D>& S, std::vector<std::uint8_t>& elsewhere) const {

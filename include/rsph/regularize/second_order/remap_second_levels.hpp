@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -29,20 +30,40 @@ RemapStats remap_second_order(ParticleSet<D, E>& p, const Box<D>& box, lattice::
   detail::check_whole_blocks(box, ml);
   const auto grids = detail::level_grids(p, box, ml, params, part);
   const auto& grid = grids.local;
+  // On many ranks, the remap by owners on the finest cells: the fits, the limiter's bounds and the thermal floor
+  // read what the other ranks' cells hold (on_owners.hpp), and each rank keeps the complete sums of the finest cells
+  // it keeps, so that the ranks' sums add up to one process's (multilevel.hpp sums them into the new cells).
+  using Owners = second_order::ByOwners<D, detail::GridCells<D, decltype(fine)>>;
+  std::optional<Owners> owners;
+  if (part.by_owners()) owners.emplace(part, detail::GridCells<D, decltype(fine)>{&grids.whole, &grid, &box, &fine});
+  auto hand_out = [&](RemapStats& stats) {
+    if (owners) {
+      second_order::hand_out_above_floor(p, part.own, second, grid.n_cells, ws, w2, stats, *owners);
+      owners->keep_kept_only(ws.sums[0]);
+    } else {
+      second_order::hand_out_above_floor(p, p.n_real, second, grid.n_cells, ws, w2, stats);
+    }
+  };
   auto sums_on = [&](const detail::CellGrid<D>& g, RemapStats& stats) -> detail::Sums<D>& {
-    auto& S = second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false,
-                                              part.cells);
-    if constexpr (D == 2) ws.reach = w2.cells.reach;  // the face hand-out builds again the cells reaching a face
-    if (part.on_ranks()) stats.limited_cells = second_order::limited_among(w2, part.own);  // others' built here too
-    return S;
+    if (owners) {
+      second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false,
+                                      part.cells, *owners);
+      owners->keep_kept_only(ws.sums[0]);
+    } else {
+      second_order::second_order_sums(p, box, fine, builder, params, second, region, g, ws, w2, stats, false,
+                                      part.cells);
+    }
+    ws.reach = w2.cells.reach;  // the face hand-out builds again the cells reaching a face
+    if (part.on_ranks()) stats.limited_cells = second_order::limited_among(w2, part.own);
+    return ws.sums[0];
   };
   auto at_faces = [&](const auto& fp, const detail::Faces& faces, RemapStats& stats) -> detail::Sums<D>& {
     std::vector<std::uint8_t> in_face(grid.n_cells);
     for (std::size_t f = 0; f < grid.n_cells; ++f) in_face[f] = faces.face_of[fp.owner[f]] >= 0;
-    const std::size_t taken = second_order::take_to_first_order(p.n_real, in_face, w2);
-    if (taken > 0) {
+    const std::size_t taken = second_order::take_to_first_order(std::min(part.own, p.n_real), in_face, w2);
+    if (owners ? owners->any(taken) : taken > 0) {  // every rank hands out again where any rank took a cell
       stats.first_order_cells += taken;
-      second_order::hand_out_above_floor(p, p.n_real, second, grid.n_cells, ws, w2, stats);
+      hand_out(stats);
     }
     return ws.sums[0];
   };
