@@ -53,8 +53,8 @@ struct RankPart {
   std::size_t own = std::numeric_limits<std::size_t>::max();
   /// The remap by owners (either order, every lattice that runs on ranks): each rank built the cells of its
   /// own particles only, and completes the sums of the new cells it keeps with the others' parts
-  /// (owner_sums.hpp). `owner_of` names the rank that keeps each point (D coordinates after another), and is
-  /// set for that remap alone. `exchange`, on many ranks, sends list q to rank q and returns what every rank sent
+  /// (owner_sums.hpp). `owner_of` names the rank that keeps each point (D coordinates after another), set for
+  /// every remap on many ranks (regularize/remap_on_ranks.hpp). `exchange`, on many ranks, sends list q to rank q and returns what every rank sent
   /// here in rank order (with the count from each, when asked for).
   std::function<std::vector<int>(std::span<const double>)> owner_of;
   std::function<std::vector<double>(const std::vector<std::vector<double>>&, std::vector<int>*)> exchange;
