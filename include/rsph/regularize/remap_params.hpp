@@ -54,8 +54,8 @@ struct RankPart {
   /// The remap by owners (either order, every lattice that runs on ranks): each rank built the cells of its
   /// own particles only, and completes the sums of the new cells it keeps with the others' parts
   /// (owner_sums.hpp). `owner_of` names the rank that keeps each point (D coordinates after another), set for
-  /// every remap on many ranks (regularize/remap_on_ranks.hpp). `exchange`, on many ranks, sends list q to rank q and returns what every rank sent
-  /// here in rank order (with the count from each, when asked for).
+  /// every remap on many ranks (regularize/remap_on_ranks.hpp). `exchange`, on many ranks, sends list q to rank q and
+  /// returns what every rank sent here in rank order (with the count from each, when asked for).
   std::function<std::vector<int>(std::span<const double>)> owner_of;
   std::function<std::vector<double>(const std::vector<std::vector<double>>&, std::vector<int>*)> exchange;
   /// The remap by owners: whether the ball of a radius about a point (D coordinates) lies where the local set
