@@ -660,8 +660,6 @@ using RsphSedovRanks =
 template <class Order>
 RsphSedovRanks<2, Order> compare_rsph_sedov(const char* order_name, int max_bin = 0,
                                             mpi::DecompositionParams decomposition = {}) {
-  // either order: each old cell built by its owner alone, the new cells' sums completed across the ranks
-  STATIC_REQUIRE(regularize::remaps_on_ranks<scenes::SedovRegularizer<2, kernel::CubicSpline, Order>>());
   scenes::SedovParams s;
   s.n = 40;
   s.max_bin = max_bin;
@@ -754,8 +752,6 @@ auto compare_sod_on_levels(const char* order_name, bool fields = true, int n_lef
   auto alone = scenes::make_rsph_sod<D, kernel::CubicSpline, Order>(s, r, extra...);
   auto ranks = scenes::make_rsph_sod<D, kernel::CubicSpline, Order>(
       s, r, extra..., mpi::Decomposition<D>(MPI_COMM_WORLD, decomposition));
-  // either order: each old cell built by its owner alone, the new cells' parts added at their keepers
-  STATIC_REQUIRE(regularize::remaps_on_ranks<std::decay_t<decltype(ranks.regularizer())>>());
   step_both_past_remaps(alone, ranks, 5);
   INFO(D << "D, " << order_name << " remap on " << world().size() << " ranks");
   check_as_one_process<D>(alone, ranks, fields);
