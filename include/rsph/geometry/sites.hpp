@@ -130,19 +130,24 @@ inline void add_periodic_images(const std::vector<Vec<D>>& x, const Box<D>& box,
   }
 }
 
-/// Mean spacing of n points in the box (open axes: their bounding box).
+/// Mean spacing of n points over the part of the box they span: their bounding box, clipped to the box on
+/// closed and periodic axes. A rank's particles fill a small part of the box, and the box's volume over their
+/// count would start every cell's search √P times too wide.
 template <int D>
 inline double mean_spacing(const std::vector<Vec<D>>& x, const Box<D>& box) {
   Vec<D> lo = box.lo, hi = box.hi;
-  for (int k = 0; k < D; ++k)
-    if (box.edge[k] == Edge::open) {
-      lo[k] = std::numeric_limits<double>::max();
-      hi[k] = std::numeric_limits<double>::lowest();
-      for (const auto& p : x) {
-        lo[k] = std::min(lo[k], p[k]);
-        hi[k] = std::max(hi[k], p[k]);
-      }
+  if (!x.empty()) {
+    Vec<D> plo = x.front(), phi = x.front();
+    for (const auto& p : x) {
+      plo = plo.cwiseMin(p);
+      phi = phi.cwiseMax(p);
     }
+    for (int k = 0; k < D; ++k) {
+      const bool open = box.edge[k] == Edge::open;
+      lo[k] = open ? plo[k] : std::max(plo[k], box.lo[k]);
+      hi[k] = open ? phi[k] : std::min(phi[k], box.hi[k]);
+    }
+  }
   const double n = static_cast<double>(std::max<std::size_t>(x.size(), 1));
   // A set thinner than its spacing (collinear on an open axis) has the spacing along its length: the volume's
   // would be tiny, and every cell's search would start from nothing.
@@ -183,9 +188,11 @@ void build_widening_images(const std::vector<Vec<D>>& x, const Box<D>& box, Visi
     if (attempt > 0) visit.restart();
     if (try_build(margin)) return;
     margin *= 2.0;
-    bool fits = true;  // cells wider than twice the box: the set is too sparse to mean anything periodic
+    // Cells wider than twice the box: the set is too sparse to mean anything periodic. A cluster far smaller than
+    // the box starts from its own spacing and doubles up to the box: tens of tries, each cheap for so few points.
+    bool fits = true;
     for (int k = 0; k < D; ++k) fits &= !box.periodic(k) || margin < 4.0 * (box.hi[k] - box.lo[k]);
-    if (!fits || attempt > 12)
+    if (!fits || attempt > 64)
       throw NumericalError("Voronoi cells: periodic cells wider than the box; too few particles for a periodic domain");
   }
 }
