@@ -11,6 +11,7 @@
 #include <Eigen/Core>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <numeric>
@@ -48,6 +49,20 @@ void remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo i
   reg.remap(p, box, info);
 }
 
+/// The mass and kinetic energy of the real particles over all ranks, in one reduction: plain sums, whose last
+/// bits depend on the rank count (the mass is checked to 1e-12, the kinetic energy removed compared to 1e-10),
+/// at a tenth of the exact totals' cost.
+template <class Domain, class Particles>
+std::array<double, 2> mass_and_kinetic(const Domain& d, const Particles& p) {
+  std::array<double, 2> s{};
+  for (std::size_t a = 0; a < p.n_real; ++a) {
+    s[0] += p.m[a];
+    s[1] += 0.5 * p.m[a] * p.v[a].squaredNorm();
+  }
+  d.sum_in_place(std::span<double>(s));
+  return s;
+}
+
 }  // namespace detail
 
 /// The remap on many ranks: each rank builds the cells of its own particles only and completes the new cells' sums
@@ -59,7 +74,7 @@ void remap_part(Domain& d, Particles& p, const Box<D>& box, Reg& reg, StepInfo i
 template <class Domain, class Particles, int D, class Reg>
 double remap_on_ranks(Domain& d, Particles& p, const Box<D>& box, Reg& reg, const StepInfo& info, double support) {
   static_assert(remaps_on_ranks<Reg>(), "this regularizer does not run on many ranks");
-  const auto before = d.totals(p);
+  const auto before = detail::mass_and_kinetic(d, p);
   double h_max = 0.0;
   for (std::size_t a = 0; a < p.n_real; ++a) h_max = std::max(h_max, p.h[a]);
   h_max = d.max(h_max);
@@ -73,11 +88,11 @@ double remap_on_ranks(Domain& d, Particles& p, const Box<D>& box, Reg& reg, cons
     }
   }
   d.renumber(p);  // the remap emitted only the sites this rank keeps
-  const auto after = d.totals(p);
-  if (!(std::abs(after.mass - before.mass) <= 1e-12 * before.mass))
+  const auto after = detail::mass_and_kinetic(d, p);
+  if (!(std::abs(after[0] - before[0]) <= 1e-12 * before[0]))
     throw NumericalError("the remap on " + std::to_string(d.ranks()) + " ranks changed the mass by " +
-                         std::to_string(after.mass / before.mass - 1.0) + ": its reach is too short");
-  return before.kinetic - after.kinetic;
+                         std::to_string(after[0] / before[0] - 1.0) + ": its reach is too short");
+  return before[1] - after[1];
 }
 
 }  // namespace rsph::regularize
