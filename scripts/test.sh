@@ -15,7 +15,7 @@ level=()
 if [ "${CI:-}" = "true" ] || [ "${RSPH_SANITIZE:-}" = 1 ]; then
   bash "$root/scripts/setup-deps.sh"
   sanitize=${RSPH_SANITIZE_DIR:-$root/build-sanitize}
-  # -O1 keeps the sanitized build short (7-9 min on 2 cores); its tests then take 2-3 min. The physics runs
+  # -O1 keeps the sanitized build short (4-5 min on 2 cores); its tests then take 1-2 min. The physics runs
   # (tests/CMakeLists.txt's rsph_run_tests) are left to the optimized build below.
   cmake -S "$root" -B "$sanitize" -DCMAKE_BUILD_TYPE=Release "-DCMAKE_CXX_FLAGS_RELEASE=-O1 -DNDEBUG" \
     -DRSPH_SANITIZE=ON -DRSPH_BUILD_EXAMPLES=OFF -DRSPH_BUILD_BENCHMARKS=OFF >/dev/null
