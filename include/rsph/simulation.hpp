@@ -339,6 +339,7 @@ class Simulation {
                   d.sum_in_place(std::span<double>(&v, 1));
                   return v;
                 },
+                [&d](std::span<double> v) { d.sum_in_place(v); },
                 [&d](std::vector<double>& rows, std::size_t w, bool add) { d.combine_by_name(rows, w, add); }};
       }
     return {};

@@ -20,6 +20,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <span>
 #include <vector>
 
 namespace rsph::physics {
@@ -30,6 +31,7 @@ namespace rsph::physics {
 struct SolveOnRanks {
   std::function<void(std::vector<double>&)> refresh_halos;  ///< halo entries of a per-point field, from their owners
   std::function<double(double)> sum;                        ///< over the ranks
+  std::function<void(std::span<double>)> sum_in_place;      ///< several sums over the ranks, in one reduction
   /// rows of a name and w values, each row's values made the sum (`add`) or the largest of every rank's rows of its
   /// name (Decomposition::combine_by_name)
   std::function<void(std::vector<double>& rows, std::size_t w, bool add)> combine;
@@ -368,8 +370,9 @@ class ConsistentGradientWorkspace {
     std::vector<double> component(m);
     for (std::size_t i = 0; i < m; ++i) component[i] = psi_old ? (*psi_old)[members_[i]][axis] : 0.0;
     const CgResult res =
-        ranks.active() ? conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations, ranks.sum)
-                       : conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations);
+        ranks.active()
+            ? conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations, ranks.sum_in_place)
+            : conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations);
     last.iterations += res.iterations;
     last.relative_residual = std::max(last.relative_residual, res.relative_residual);
     last.converged = last.converged && res.converged;
