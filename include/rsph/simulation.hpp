@@ -334,12 +334,7 @@ class Simulation {
     if constexpr (distributed)
       if (on_many_ranks()) {
         const auto& d = domain();
-        return {[&d](std::vector<double>& f) { d.refresh_halos(f); },
-                [&d](double v) {
-                  d.sum_in_place(std::span<double>(&v, 1));
-                  return v;
-                },
-                [&d](std::span<double> v) { d.sum_in_place(v); },
+        return {[&d](std::vector<double>& f) { d.refresh_halos(f); }, [&d](std::span<double> v) { d.sum_in_place(v); },
                 [&d](std::vector<double>& rows, std::size_t w, bool add) { d.combine_by_name(rows, w, add); }};
       }
     return {};

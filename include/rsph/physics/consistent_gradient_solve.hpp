@@ -30,12 +30,16 @@ namespace rsph::physics {
 /// process.
 struct SolveOnRanks {
   std::function<void(std::vector<double>&)> refresh_halos;  ///< halo entries of a per-point field, from their owners
-  std::function<double(double)> sum;                        ///< over the ranks
-  std::function<void(std::span<double>)> sum_in_place;      ///< several sums over the ranks, in one reduction
+  std::function<void(std::span<double>)> sum;               ///< values summed over the ranks in place, in one reduction
   /// rows of a name and w values, each row's values made the sum (`add`) or the largest of every rank's rows of its
   /// name (Decomposition::combine_by_name)
   std::function<void(std::vector<double>& rows, std::size_t w, bool add)> combine;
   bool active() const { return static_cast<bool>(sum); }
+  /// One value summed over the ranks.
+  double sum_of(double v) const {
+    sum(std::span<double>(&v, 1));
+    return v;
+  }
 };
 
 /// The state of the consistent-gradient solve a simulation keeps between force passes.
@@ -84,7 +88,7 @@ class ConsistentGradientWorkspace {
       psi.assign(p.size_with_ghosts(), Vec<D>::Zero());
       last = CgResult{};
       last.converged = true;
-      if (ranks.active() ? ranks.sum(static_cast<double>(members_.size())) > 0.0 : !members_.empty()) {
+      if (ranks.active() ? ranks.sum_of(static_cast<double>(members_.size())) > 0.0 : !members_.empty()) {
         pair_weights_and_rhs<Kernel>(p, box, nl);
         const auto anchored = ranks.active() ? pieces_on_ranks(p, nl, ranks) : connected_pieces(n, nl, p.ghost_source);
         const auto diagonal = assemble(n, nl, p.ghost_source);
@@ -259,7 +263,7 @@ class ConsistentGradientWorkspace {
         }
       }
       ranks.refresh_halos(name);
-      changed = ranks.sum(changed ? 1.0 : 0.0) > 0.0;
+      changed = ranks.sum_of(changed ? 1.0 : 0.0) > 0.0;
     }
     // each piece's local number, and its anchors over all ranks: (name, anchored per axis) from every rank
     std::map<double, std::int32_t> local;
@@ -370,9 +374,8 @@ class ConsistentGradientWorkspace {
     std::vector<double> component(m);
     for (std::size_t i = 0; i < m; ++i) component[i] = psi_old ? (*psi_old)[members_[i]][axis] : 0.0;
     const CgResult res =
-        ranks.active()
-            ? conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations, ranks.sum_in_place)
-            : conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations);
+        ranks.active() ? conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations, ranks.sum)
+                       : conjugate_gradient(apply, diag, rhs, component, term.tolerance, term.max_iterations);
     last.iterations += res.iterations;
     last.relative_residual = std::max(last.relative_residual, res.relative_residual);
     last.converged = last.converged && res.converged;
