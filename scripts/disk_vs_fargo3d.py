@@ -27,6 +27,8 @@ def run_row(folder):
     prof = read_csv(os.path.join(folder, "profile.csv"))
     l1 = fargo3d_l1s(prof["r"], prof["sigma_over_sigma0"])
     label = f"{s.get('method', 'rsph')} {s.get('lattice', 'square')} {s.get('remap', '')}".strip()
+    if s.get("max_steps", 160) != 160:  # Appendix A's cap on the steps between remaps, the paper's 160 in §5
+        label += " remap every block" if s["max_steps"] == 1 else f" max-steps {s['max_steps']}"
     if s.get("rsph_alpha", 0.0) > 0.0:
         label += f" switched viscosity {s['rsph_alpha']:g}/{s['rsph_beta']:g}"
     return {"folder": folder, "label": label, "particles": s["particles_initial"], "orbits": s["orbits"],

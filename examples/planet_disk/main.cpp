@@ -203,6 +203,8 @@ io::Json disk_summary(const Options& opt, const scenes::DiskRun& r, const FinalF
       .set("eos", s.eos)
       .set("q", s.q);
   if (s.rsph()) summary.set("remap", s.remap);
+  if (s.rsph() && s.dim == 2)  // Appendix A's schedule
+    summary.set("N_min", s.N_min).set("N_max", s.N_max).set("dN_max", s.dN_max).set("max_steps", s.max_steps);
   summary.set("max_bin", s.rsph() ? s.max_bin : 0);
   summary.set("h_over_dx", s.h_over_dx).set("spacing", s.spacing()).set("h", s.h()).set("orbits", s.orbits);
   summary.set("lattice", s.dim == 3 ? (s.rsph() ? "cubic" : "columns") : s.lattice);
