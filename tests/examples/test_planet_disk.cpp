@@ -92,7 +92,8 @@ namespace {
 /// rms radial velocity, in units of the sound speed there, of the free gas in the 0.1 wide annulus outside the
 /// inner fixed zone, after `orbits` of the drifting disk (q = 0) on the rings at 8000 particles; `max_steps`:
 /// Appendix A's most block steps between regularizations.
-double rings_edge_noise(double damping_width, double rsph_alpha, double orbits, int max_steps = 160) {
+double rings_edge_noise(double damping_width, double rsph_alpha, double orbits,
+                        int max_steps = scenes::PlanetDiskParams{}.max_steps) {
   scenes::PlanetDiskParams s;
   s.particles = 8000;
   s.max_steps = max_steps;
